@@ -1,0 +1,72 @@
+// Basic types shared by every stage of the core: points, polylines, 2D poses and laser scans.
+// Units are SI (metres, radians, seconds) unless a name says otherwise.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/StdVector>
+#include <cmath>
+#include <optional>
+#include <vector>
+
+namespace shape_slam {
+
+/// A point in the plane, metres.
+using Point2 = Eigen::Vector2d;
+
+/// An open polygonal line ("polyline", paper §3): vertices in order, metres. Consecutive
+/// vertices are joined by straight segments. A polyline of one vertex is a single point.
+using Polyline = std::vector<Point2>;
+
+/// Wraps an angle into (-pi, pi].
+inline double NormalizeAngle(double angle_rad) {
+  const double wrapped = std::remainder(angle_rad, 2.0 * M_PI);
+  return wrapped <= -M_PI ? wrapped + 2.0 * M_PI : wrapped;
+}
+
+/// A rigid motion of the plane. Name instances by their frames: `T_map_scan` maps points given
+/// in the scan frame into the map frame.
+struct Pose2 {
+  double x = 0.0;      ///< translation, metres
+  double y = 0.0;      ///< translation, metres
+  double theta = 0.0;  ///< rotation, radians, counter-clockwise
+
+  Pose2() = default;
+  Pose2(double x_m, double y_m, double theta_rad) : x(x_m), y(y_m), theta(theta_rad) {}
+
+  Eigen::Vector2d Translation() const { return {x, y}; }
+  Eigen::Matrix2d Rotation() const {
+    const double c = std::cos(theta), s = std::sin(theta);
+    return (Eigen::Matrix2d() << c, -s, s, c).finished();
+  }
+  /// Maps a point from this pose's child frame into its parent frame.
+  Point2 operator*(const Point2& p) const { return Rotation() * p + Translation(); }
+  /// Composition: `T_a_c = T_a_b * T_b_c`.
+  Pose2 operator*(const Pose2& other) const {
+    const Point2 t = (*this) * other.Translation();
+    return {t.x(), t.y(), NormalizeAngle(theta + other.theta)};
+  }
+  Pose2 Inverse() const {
+    const Point2 t = -(Rotation().transpose() * Translation());
+    return {t.x(), t.y(), NormalizeAngle(-theta)};
+  }
+};
+
+/// Applies a pose to every vertex of a polyline.
+inline Polyline Transform(const Pose2& T_b_a, const Polyline& polyline_a) {
+  Polyline out;
+  out.reserve(polyline_a.size());
+  for (const Point2& p : polyline_a) out.push_back(T_b_a * p);
+  return out;
+}
+
+/// One planar laser scan, as every log reader delivers it (the common stream of the I/O layer).
+struct LaserScan {
+  double timestamp_s = 0.0;         ///< as given by the log, seconds
+  std::vector<double> ranges_m;     ///< one per beam; NaN or <= 0 means "no reading"
+  std::vector<double> angles_rad;   ///< beam directions in the sensor frame, counter-clockwise
+  double max_range_m = 0.0;         ///< readings >= this are "no return"
+  Pose2 T_robot_sensor;             ///< sensor mounting on the robot
+  std::optional<Pose2> T_odom_robot;  ///< odometry pose of the robot, when the log gives one
+};
+
+}  // namespace shape_slam
