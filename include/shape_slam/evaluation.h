@@ -1,0 +1,61 @@
+// Trajectory accuracy metrics, as defined in datasets/radish/README.md: the absolute trajectory
+// error (ATE) after the best rigid 2D alignment, and the relation errors of Kümmerle et al.
+// (2009), "On measuring the accuracy of SLAM algorithms", split into consecutive-scan
+// relations (local accuracy) and the rest (revisits: global consistency).
+#pragma once
+
+#include <cstddef>
+#include <optional>
+#include <vector>
+
+#include "shape_slam/types.h"
+
+namespace shape_slam {
+
+struct StampedPose {
+  double timestamp_s = 0.0;
+  Pose2 pose;
+};
+
+/// A relation: the reference motion from the pose at t1 to the pose at t2, in the frame of t1.
+struct Relation {
+  double t1_s = 0.0;
+  double t2_s = 0.0;
+  Pose2 T_1_2;
+};
+
+struct EvaluationParams {
+  /// Poses are associated by timestamp when they differ by at most this, seconds.
+  double max_time_difference_s = 1e-3;
+  void Validate() const;
+};
+
+struct RelationErrors {
+  std::size_t count = 0;          ///< relations evaluated (both poses found)
+  std::size_t missing = 0;        ///< relations whose poses were not in the estimate
+  double mean_translation_m = 0;  ///< mean absolute translation error
+  double mean_rotation_deg = 0;   ///< mean absolute rotation error
+};
+
+struct EvaluationResult {
+  std::size_t matched_poses = 0;  ///< estimate poses associated with a reference pose
+  std::size_t reference_poses = 0;
+  double ate_rmse_m = 0.0;        ///< after the best rigid alignment
+  double ate_max_m = 0.0;
+  Pose2 T_reference_estimate;     ///< that alignment
+  RelationErrors local;           ///< t2 is the reference pose right after t1
+  RelationErrors revisit;         ///< all other relations
+};
+
+/// Best rigid transform (no scale) mapping `from` onto `to` in the least-squares sense.
+/// Precondition: equal sizes, at least one point.
+Pose2 BestRigidAlignment(const std::vector<Point2>& from, const std::vector<Point2>& to);
+
+/// Evaluates `estimate` against `reference` (and `relations`, may be empty). Throws
+/// std::invalid_argument when no estimate pose can be associated with the reference.
+EvaluationResult EvaluateTrajectory(const std::vector<StampedPose>& estimate,
+                                    const std::vector<StampedPose>& reference,
+                                    const std::vector<Relation>& relations,
+                                    const EvaluationParams& params = {});
+
+}  // namespace shape_slam

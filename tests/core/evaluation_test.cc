@@ -1,0 +1,91 @@
+#include "shape_slam/evaluation.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+namespace shape_slam {
+namespace {
+
+std::vector<StampedPose> Spiral(int n) {
+  std::vector<StampedPose> poses;
+  for (int i = 0; i < n; ++i) {
+    const double a = 0.3 * i;
+    poses.push_back({10.0 + i, Pose2((1.0 + 0.2 * i) * std::cos(a), (1.0 + 0.2 * i) * std::sin(a), a)});
+  }
+  return poses;
+}
+
+TEST(EvaluationTest, RigidlyMovedTrajectoryHasZeroError) {
+  const std::vector<StampedPose> reference = Spiral(30);
+  const Pose2 T(3.0, -2.0, 0.7);
+  std::vector<StampedPose> estimate;
+  for (const StampedPose& p : reference) estimate.push_back({p.timestamp_s, T * p.pose});
+  std::vector<Relation> relations;
+  for (std::size_t i = 0; i + 1 < reference.size(); ++i) {
+    relations.push_back({reference[i].timestamp_s, reference[i + 1].timestamp_s,
+                         reference[i].pose.Inverse() * reference[i + 1].pose});
+  }
+  relations.push_back({reference[0].timestamp_s, reference[20].timestamp_s,
+                       reference[0].pose.Inverse() * reference[20].pose});
+  const EvaluationResult r = EvaluateTrajectory(estimate, reference, relations);
+  EXPECT_EQ(r.matched_poses, 30u);
+  EXPECT_NEAR(r.ate_rmse_m, 0.0, 1e-9);
+  EXPECT_EQ(r.local.count, 29u);
+  EXPECT_EQ(r.revisit.count, 1u);
+  EXPECT_NEAR(r.local.mean_translation_m, 0.0, 1e-9);
+  EXPECT_NEAR(r.revisit.mean_rotation_deg, 0.0, 1e-9);
+  // The recovered alignment is the inverse of the motion applied.
+  EXPECT_NEAR(r.T_reference_estimate.theta, -0.7, 1e-9);
+}
+
+TEST(EvaluationTest, KnownErrorsAreMeasured) {
+  // Reference on a line; the estimate has one pose displaced by 0.3 m sideways.
+  std::vector<StampedPose> reference, estimate;
+  for (int i = 0; i < 5; ++i) {
+    reference.push_back({static_cast<double>(i), Pose2(i, 0.0, 0.0)});
+    estimate.push_back({static_cast<double>(i), Pose2(i, i == 2 ? 0.3 : 0.0, i == 2 ? 0.1 : 0.0)});
+  }
+  const std::vector<Relation> relations = {{1.0, 2.0, Pose2(1, 0, 0)}, {2.0, 3.0, Pose2(1, 0, 0)}};
+  const EvaluationResult r = EvaluateTrajectory(estimate, reference, relations);
+  // Best alignment of {0,0,0.3,0,0} onto zeros: shift by -0.06 along y (rotation ~0 by symmetry).
+  const double expected = std::sqrt((4 * 0.06 * 0.06 + 0.24 * 0.24) / 5.0);
+  EXPECT_NEAR(r.ate_rmse_m, expected, 1e-9);
+  EXPECT_EQ(r.local.count, 2u);
+  // Relation 1->2: estimate (1, 0.3, 0.1) vs (1, 0, 0): error translation 0.3, rotation 0.1 rad.
+  // Relation 2->3: x2^-1 x3 = rotation -0.1 and translation R(-0.1)(1, -0.3).
+  const Pose2 e2 = Pose2(1, 0, 0).Inverse() * (Pose2(2, 0.3, 0.1).Inverse() * Pose2(3, 0, 0));
+  EXPECT_NEAR(r.local.mean_translation_m, (0.3 + e2.Translation().norm()) / 2, 1e-9);
+  EXPECT_NEAR(r.local.mean_rotation_deg, 0.1 * 180 / M_PI, 1e-9);
+}
+
+TEST(EvaluationTest, AssociatesByTimestampWithinTolerance) {
+  std::vector<StampedPose> reference = {{1.0, Pose2(0, 0, 0)}, {2.0, Pose2(1, 0, 0)}};
+  std::vector<StampedPose> estimate = {{1.0004, Pose2(0, 0, 0)}, {2.5, Pose2(1, 0, 0)}};
+  const EvaluationResult r = EvaluateTrajectory(estimate, reference, {{1.0, 2.0, Pose2(1, 0, 0)}});
+  EXPECT_EQ(r.matched_poses, 1u);
+  EXPECT_EQ(r.local.missing, 1u);
+  EXPECT_EQ(r.local.count, 0u);
+  EXPECT_THROW(EvaluateTrajectory({{7.0, Pose2()}}, reference, {}), std::invalid_argument);
+}
+
+TEST(EvaluationTest, BestRigidAlignmentRecoversRandomMotions) {
+  std::mt19937 prng(42);
+  std::uniform_real_distribution<double> u(-10.0, 10.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    std::vector<Point2> from, to;
+    const Pose2 T(u(prng), u(prng), u(prng) / 4.0);
+    for (int i = 0; i < 10; ++i) {
+      from.emplace_back(u(prng), u(prng));
+      to.push_back(T * from.back());
+    }
+    const Pose2 found = BestRigidAlignment(from, to);
+    EXPECT_NEAR(found.x, T.x, 1e-9);
+    EXPECT_NEAR(found.y, T.y, 1e-9);
+    EXPECT_NEAR(NormalizeAngle(found.theta - T.theta), 0.0, 1e-9);
+  }
+}
+
+}  // namespace
+}  // namespace shape_slam

@@ -1,0 +1,53 @@
+#include "shape_slam_io/atomic_file.h"
+
+#include <gtest/gtest.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+
+#include "io/test_files.h"
+
+namespace shape_slam::io {
+namespace {
+
+using testing::ReadFile;
+using testing::TempDir;
+
+TEST(AtomicFileTest, ReplacesContentAndLeavesNoTemporaryFiles) {
+  TempDir dir;
+  const std::string path = dir.Write("out.txt", "old results");
+  WriteFileAtomically(path, "new results");
+  EXPECT_EQ(ReadFile(path), "new results");
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path())) {
+    (void)entry;
+    ++files;
+  }
+  EXPECT_EQ(files, 1);
+  struct stat st {};
+  ASSERT_EQ(::stat(path.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0644u);
+}
+
+TEST(AtomicFileTest, FailureKeepsTheOldFile) {
+  TempDir dir;
+  const std::string path = dir.Write("out.txt", "old results");
+  // A directory where the file should go: the write must fail and change nothing.
+  std::filesystem::create_directory(dir.Path("blocked"));
+  EXPECT_THROW(WriteFileAtomically(dir.Path("blocked"), "x"), OutputError);
+  // An unwritable directory: the temporary file cannot be created.
+  EXPECT_THROW(WriteFileAtomically(dir.Path("no/such/dir/out.txt"), "x"), OutputError);
+  EXPECT_EQ(ReadFile(path), "old results");
+}
+
+TEST(AtomicFileTest, EnsureDirectoryCreatesParentsAndRejectsFiles) {
+  TempDir dir;
+  EnsureDirectory(dir.Path("a/b/c"));
+  EXPECT_TRUE(std::filesystem::is_directory(dir.Path("a/b/c")));
+  EnsureDirectory(dir.Path("a/b/c"));  // idempotent
+  const std::string file = dir.Write("file", "x");
+  EXPECT_THROW(EnsureDirectory(file), OutputError);
+}
+
+}  // namespace
+}  // namespace shape_slam::io
