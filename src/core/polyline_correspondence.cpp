@@ -1,0 +1,131 @@
+#include "shape_slam/polyline_correspondence.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <stdexcept>
+
+namespace shape_slam {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Memoised group costs: every (scan group, model group) is evaluated at most once, whatever the
+// number of model rotations tried. NaN marks "not evaluated yet", +inf a forbidden pair.
+class CostCache {
+ public:
+  CostCache(const CorrespondenceProblem& problem, int num_scan, int num_model)
+      : problem_(problem),
+        num_model_(num_model),
+        g_(problem.max_group_size),
+        values_(static_cast<std::size_t>(num_scan) * num_model * g_ * g_,
+                std::numeric_limits<double>::quiet_NaN()) {}
+
+  double Get(int scan_first, int scan_count, int model_first, int model_count) {
+    const std::size_t key =
+        ((static_cast<std::size_t>(scan_first) * num_model_ + model_first) * g_ + scan_count - 1) *
+            g_ +
+        model_count - 1;
+    double& value = values_[key];
+    if (std::isnan(value)) {
+      const std::optional<double> cost =
+          problem_.group_cost(scan_first, scan_count, model_first, model_count);
+      value = cost && std::isfinite(*cost) ? *cost : kInf;
+    }
+    return value;
+  }
+
+ private:
+  const CorrespondenceProblem& problem_;
+  int num_model_;
+  int g_;
+  std::vector<double> values_;
+};
+
+// What the optimal step into a DP cell was.
+struct Step {
+  int scan_count = 0;   // 0 with model_count 1: skip a model polyline
+  int model_count = 0;  // 0 with scan_count 1: skip a scan polyline
+  bool match = false;
+};
+
+// One DP over a fixed model rotation: dp[i][k] = least cost of the first i scan polylines and
+// the first k model polylines of the rotated order.
+CorrespondenceSolution SolveRotation(const CorrespondenceProblem& problem, CostCache& cache,
+                                     int rotation) {
+  const int a = static_cast<int>(problem.scan_skip_penalty.size());
+  const int b = static_cast<int>(problem.model_skip_penalty.size());
+  const int g = problem.max_group_size;
+  const int w = b + 1;
+  std::vector<double> dp(static_cast<std::size_t>(a + 1) * w, kInf);
+  std::vector<Step> from(dp.size());
+  dp[0] = 0.0;
+  auto relax = [&](int i, int k, double cost, Step step) {
+    double& cell = dp[static_cast<std::size_t>(i) * w + k];
+    if (cost < cell) {
+      cell = cost;
+      from[static_cast<std::size_t>(i) * w + k] = step;
+    }
+  };
+  for (int i = 0; i <= a; ++i) {
+    for (int k = 0; k <= b; ++k) {
+      const double here = dp[static_cast<std::size_t>(i) * w + k];
+      if (here == kInf) continue;
+      if (i < a) relax(i + 1, k, here + problem.scan_skip_penalty[i], {1, 0, false});
+      if (k < b) {
+        relax(i, k + 1, here + problem.model_skip_penalty[(rotation + k) % b], {0, 1, false});
+      }
+      for (int gs = 1; gs <= g && i + gs <= a; ++gs) {
+        for (int gm = 1; gm <= g && k + gm <= b; ++gm) {
+          if (gs > 1 && gm > 1) break;  // only 1-to-1, 1-to-many and many-to-1
+          const double cost = cache.Get(i, gs, (rotation + k) % b, gm);
+          if (cost < kInf) relax(i + gs, k + gm, here + cost, {gs, gm, true});
+        }
+      }
+    }
+  }
+  CorrespondenceSolution solution;
+  solution.total_cost = dp.back();
+  solution.model_rotation = rotation;
+  for (int i = a, k = b; i > 0 || k > 0;) {
+    const Step step = from[static_cast<std::size_t>(i) * w + k];
+    i -= step.scan_count;
+    k -= step.model_count;
+    if (step.match) {
+      const double cost = cache.Get(i, step.scan_count, (rotation + k) % b, step.model_count);
+      solution.matches.push_back({i, step.scan_count, (rotation + k) % b, step.model_count, cost});
+    }
+  }
+  std::reverse(solution.matches.begin(), solution.matches.end());
+  return solution;
+}
+
+}  // namespace
+
+CorrespondenceSolution SolveCorrespondence(const CorrespondenceProblem& problem) {
+  if (!problem.group_cost) throw std::invalid_argument("SolveCorrespondence: group_cost is empty");
+  if (problem.max_group_size < 1) {
+    throw std::invalid_argument("SolveCorrespondence: max_group_size must be >= 1");
+  }
+  const int a = static_cast<int>(problem.scan_skip_penalty.size());
+  const int b = static_cast<int>(problem.model_skip_penalty.size());
+  if (a == 0 || b == 0) {
+    CorrespondenceSolution none;
+    none.total_cost = std::accumulate(problem.scan_skip_penalty.begin(),
+                                      problem.scan_skip_penalty.end(), 0.0) +
+                      std::accumulate(problem.model_skip_penalty.begin(),
+                                      problem.model_skip_penalty.end(), 0.0);
+    return none;
+  }
+  CostCache cache(problem, a, b);
+  const int rotations = problem.model_cyclic ? b : 1;
+  CorrespondenceSolution best = SolveRotation(problem, cache, 0);
+  for (int r = 1; r < rotations; ++r) {
+    CorrespondenceSolution candidate = SolveRotation(problem, cache, r);
+    if (candidate.total_cost < best.total_cost) best = std::move(candidate);
+  }
+  return best;
+}
+
+}  // namespace shape_slam
