@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# The test command (README, second command; .ci/run calls it): installs what is missing, builds
+# and runs the whole test suite, then again under AddressSanitizer + UndefinedBehaviorSanitizer,
+# and checks that the core builds with the MRPT parts switched off.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+jobs=$(nproc)
+step() { echo; echo "=== $* ($(date +%T))"; }
+
+step "setup"
+bash scripts/setup.sh
+
+step "Release build"
+bash scripts/build.sh
+
+step "tests (Release)"
+ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j"$jobs"
+
+step "sanitizer build (ASan + UBSan)"
+BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo \
+  CMAKE_ARGS="-DSHAPE_SLAM_SANITIZE=ON -DSHAPE_SLAM_BUILD_BENCH=OFF" bash scripts/build.sh
+
+step "tests (ASan + UBSan)"
+ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  ctest --test-dir build-asan --output-on-failure -j"$jobs"
+
+step "core alone (SHAPE_SLAM_WITH_MRPT=OFF, no apps): configure and build"
+BUILD_DIR=build-core CMAKE_ARGS="-DSHAPE_SLAM_WITH_MRPT=OFF -DSHAPE_SLAM_BUILD_APPS=OFF \
+  -DSHAPE_SLAM_BUILD_TESTS=OFF -DSHAPE_SLAM_BUILD_BENCH=OFF" bash scripts/build.sh
+
+step "all tests passed"
