@@ -1,0 +1,31 @@
+// Shared by the commands: opening logs (reader warnings printed to stderr, scan lookup by
+// index) and loading parameters.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <string>
+
+#include "shape_slam/pipeline.h"
+#include "shape_slam/types.h"
+#include "shape_slam_io/log_reader.h"
+
+namespace shape_slam::app {
+
+/// Opens a log; in non-strict mode malformed records are skipped and reported by
+/// ReportLogIssues.
+std::unique_ptr<io::LogReader> OpenLogForApp(const std::string& path, bool strict);
+
+/// Prints the reader's skipped records and oddities to stderr as warnings (at most 10 lines
+/// and a count).
+void ReportLogIssues(const io::LogReader& reader);
+
+/// The laser scan with 0-based index `index` of the log. Throws std::runtime_error naming the
+/// log and how many scans it has when the index is out of range.
+LaserScan ReadScanAt(const std::string& path, long long index, bool strict);
+
+/// The mapper's parameters: the defaults, overridden by an ini file when one is given (every
+/// key validated; see config/default.ini).
+ShapeSlamParams LoadParamsForApp(const std::optional<std::string>& ini_path);
+
+}  // namespace shape_slam::app

@@ -1,0 +1,86 @@
+// shape-slam eval: ATE and Kümmerle relation errors of a trajectory against reference poses.
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "cli.h"
+#include "commands.h"
+#include "shape_slam/evaluation.h"
+#include "shape_slam_io/json_writer.h"
+#include "shape_slam_io/trajectory_io.h"
+
+namespace shape_slam::app {
+namespace {
+
+ArgParser MakeParser() {
+  ArgParser parser(
+      "eval",
+      "Evaluates an estimated trajectory against reference poses, as defined in\n"
+      "datasets/radish/README.md: ATE = RMSE of positions after the best rigid 2D alignment;\n"
+      "relation errors (Kümmerle et al. 2009) = mean absolute translation (m) and rotation (deg)\n"
+      "of (x_t1^-1 (+) x_t2) (-) reference, for consecutive-scan relations (local) and the rest\n"
+      "(revisits). Poses are associated by timestamp.");
+  parser.Positional("TRAJ", "estimated trajectory: TUM or 't x y theta' lines")
+      .Positional("GT", "reference trajectory: TUM or 't x y theta' lines")
+      .Positional("RELATIONS", "relations file 't1 t2 x y z roll pitch yaw'", false)
+      .Option("--max-dt", {"S"}, "largest timestamp difference for associating poses, seconds",
+              "0.001")
+      .Flag("--json", "print one JSON object");
+  return parser;
+}
+
+void RelationJson(io::JsonWriter& json, const char* key, const RelationErrors& e) {
+  json.Key(key).BeginObject().Key("count").Value(e.count).Key("missing").Value(e.missing);
+  json.Key("trans_m").Value(e.mean_translation_m).Key("rot_deg").Value(e.mean_rotation_deg);
+  json.EndObject();
+}
+
+std::string Json(const EvaluationResult& r) {
+  io::JsonWriter json;
+  json.BeginObject().Key("matched_poses").Value(r.matched_poses);
+  json.Key("reference_poses").Value(r.reference_poses);
+  json.Key("ate_m").Value(r.ate_rmse_m).Key("ate_max_m").Value(r.ate_max_m);
+  RelationJson(json, "local", r.local);
+  RelationJson(json, "revisit", r.revisit);
+  json.EndObject();
+  return json.str() + "\n";
+}
+
+std::string Text(const EvaluationResult& r, bool have_relations) {
+  std::ostringstream out;
+  out << std::fixed << std::setprecision(4) << "poses matched   " << r.matched_poses << " of "
+      << r.reference_poses << " reference poses\n"
+      << "ATE (RMSE)      " << r.ate_rmse_m << " m (max " << r.ate_max_m << " m)\n";
+  if (have_relations) {
+    auto line = [&](const char* name, const RelationErrors& e) {
+      out << name << e.mean_translation_m << " m, " << e.mean_rotation_deg << " deg  (" << e.count
+          << " relations" << (e.missing ? ", " + std::to_string(e.missing) + " missing" : "")
+          << ")\n";
+    };
+    line("local relations ", r.local);
+    line("revisit rel.    ", r.revisit);
+  }
+  return out.str();
+}
+
+}  // namespace
+
+int RunEval(const Args& args) {
+  ArgParser parser = MakeParser();
+  if (!parser.Parse(args)) {
+    std::cout << parser.Help();
+    return 0;
+  }
+  EvaluationParams params;
+  params.max_time_difference_s = parser.GetDouble("--max-dt", params.max_time_difference_s);
+  if (params.max_time_difference_s < 0) throw UsageError("--max-dt must be >= 0");
+  const std::vector<StampedPose> estimate = io::ReadTrajectory(parser.Get("TRAJ"));
+  const std::vector<StampedPose> reference = io::ReadTrajectory(parser.Get("GT"));
+  std::vector<Relation> relations;
+  if (const auto path = parser.GetOptional("RELATIONS")) relations = io::ReadRelations(*path);
+  const EvaluationResult result = EvaluateTrajectory(estimate, reference, relations, params);
+  std::cout << (parser.Has("--json") ? Json(result) : Text(result, !relations.empty()));
+  return 0;
+}
+
+}  // namespace shape_slam::app

@@ -1,0 +1,116 @@
+// The incremental mapper (paper §3-§5): for every laser scan
+//   extract polylines (§3.1) -> predict the pose -> visible map shape from the prediction (§3)
+//   -> shape matching (§4.2, or §4.3 without odometry) -> restricted ICP (§5.1) -> Ceres
+//   refinement against every visible wall -> map update at keyframes (§5.2).
+//
+// Keyframes: the map is updated when the robot has moved at least
+// KeyframeParams::min_translation_m or turned min_rotation_rad since the last map update (and
+// on the first scan). Every scan is localised; only keyframes change the map, which keeps dense
+// logs fast and avoids averaging the same view into a wall many times.
+//
+// Without odometry (or with use_odometry = false) the pose is predicted from the last pose and
+// the shape matcher finds the motion by itself (§4.3); the constant-velocity extrapolation is
+// tried as one more candidate estimate.
+//
+// Deterministic: the same scans and parameters give bit-identical results.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "shape_slam/alignment_refinement.h"
+#include "shape_slam/discrete_curve_evolution.h"
+#include "shape_slam/map_update.h"
+#include "shape_slam/polyline_extraction.h"
+#include "shape_slam/polyline_map.h"
+#include "shape_slam/shape_matcher.h"
+#include "shape_slam/visibility.h"
+
+namespace shape_slam {
+
+struct KeyframeParams {
+  double min_translation_m = 0.20;  ///< metres since the last map update
+  double min_rotation_rad = 0.15;   ///< radians since the last map update
+  void Validate() const;
+};
+
+/// Odometry noise model, giving the covariance of the prior on each scan's pose: the standard
+/// deviation grows with the distance travelled and the angle turned since the last scan.
+struct OdometryNoiseParams {
+  double sigma_xy_m = 0.05;                ///< floor, metres
+  double sigma_xy_per_m = 0.20;            ///< metres per metre travelled
+  double sigma_theta_rad = 0.02;           ///< floor, radians
+  double sigma_theta_per_rad = 0.20;       ///< radians per radian turned
+  double sigma_theta_per_m = 0.05;         ///< radians per metre travelled
+  void Validate() const;
+};
+
+struct ShapeSlamParams {
+  ExtractionParams extraction;       ///< §3.1 grouping
+  DceParams dce;                     ///< §3.1 simplification before shape matching
+  /// Lighter DCE of the same polylines whose samples drive the alignment (§5.1), metres.
+  double alignment_dce_threshold_m = 0.005;
+  VisibilityParams visibility;       ///< visible map shape; its fov_rad is set per scan
+  /// The visible map shape covers the scan's field of view widened by this on each side, rad.
+  double visibility_fov_margin_rad = 0.35;
+  ShapeMatcherParams matcher;        ///< §4.2-§4.3 and the §5.1 ICP
+  RefinementParams refinement;       ///< Ceres refinement after the restricted ICP
+  MapUpdateParams map_update;        ///< §5.2
+  KeyframeParams keyframe;
+  OdometryNoiseParams odometry_noise;
+  /// Use the log's odometry to predict poses; when false (or the log has none) §4.3 applies.
+  bool use_odometry = true;
+  /// A match is trusted when at least this fraction of the scan lies on the map afterwards.
+  double min_inlier_ratio = 0.30;
+  /// Cell size of the map's spatial index, metres.
+  double index_cell_size_m = 2.0;
+
+  void Validate() const;
+};
+
+/// What the mapper did with one scan.
+struct ScanReport {
+  double timestamp_s = 0.0;
+  Pose2 T_map_robot;                 ///< the estimated robot pose
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< of (x, y, theta), when matched
+  bool matched = false;              ///< the pose comes from a trusted match (else prediction)
+  bool keyframe = false;             ///< the map was updated with this scan
+  bool used_odometry = false;        ///< the prediction used odometry
+  int matched_pairs = 0;             ///< correspondences of eq. (4)
+  int polylines = 0;                 ///< polylines extracted from the scan
+  double inlier_ratio = 0.0;         ///< see ShapeMatchResult
+  double rms_error_m = 0.0;          ///< refinement RMS
+  MapUpdateStats map_update;
+};
+
+class ShapeSlam {
+ public:
+  /// Throws std::invalid_argument when a parameter is invalid (the message names it).
+  explicit ShapeSlam(const ShapeSlamParams& params = {});
+
+  /// Processes the next scan. Throws std::invalid_argument for a malformed scan (sizes differ,
+  /// non-finite angles or timestamp); a scan without valid points is not an error (it is
+  /// localised by prediction and leaves the map unchanged).
+  ScanReport Process(const LaserScan& scan);
+
+  const PolylineMap& Map() const { return map_; }
+  const ShapeSlamParams& Params() const { return params_; }
+
+ private:
+  struct Prediction {
+    Pose2 T_map_robot;
+    std::optional<Pose2> T_pred_robot_velocity;  // constant-velocity hint (no odometry)
+    std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry
+  };
+  Prediction Predict(const LaserScan& scan) const;
+  bool IsKeyframe(const Pose2& T_map_robot) const;
+
+  ShapeSlamParams params_;
+  PolylineMap map_;
+  std::optional<Pose2> last_T_map_robot_;
+  std::optional<Pose2> previous_T_map_robot_;  // the one before last, for constant velocity
+  std::optional<Pose2> last_T_odom_robot_;
+  std::optional<Pose2> last_keyframe_T_map_robot_;
+};
+
+}  // namespace shape_slam

@@ -1,0 +1,34 @@
+// Grouping of scan points into polylines (paper §3.1).
+//
+// Traversing the reflection points in the order the scanner measured them, an object
+// transition is present wherever two consecutive points are farther apart than a distance
+// threshold (the paper uses 20 cm) -- and wherever a beam gave no usable reading.
+#pragma once
+
+#include <vector>
+
+#include "shape_slam/types.h"
+
+namespace shape_slam {
+
+struct ExtractionParams {
+  /// Consecutive points farther apart than this start a new polyline, metres (§3.1: 0.20).
+  double max_gap_m = 0.20;
+  /// Readings at or below this range are invalid, metres.
+  double min_range_m = 0.02;
+  /// Polylines with fewer points are dropped (isolated returns carry no shape).
+  int min_points = 2;
+
+  /// Throws std::invalid_argument naming the offending field.
+  void Validate() const;
+};
+
+/// The scan's points grouped into polylines, in the SENSOR frame, in beam order. A beam is
+/// invalid (and splits) when its range is not finite, <= min_range_m or >= the scan's
+/// max_range_m. For a scan covering 360 deg (span of the beam angles plus one beam step
+/// >= 2 pi - 1e-6) the order is cyclic: the last and the first group are joined across the
+/// seam when no split separates them. Throws std::invalid_argument when ranges and angles
+/// differ in size or the params are invalid.
+std::vector<Polyline> ExtractPolylines(const LaserScan& scan, const ExtractionParams& params);
+
+}  // namespace shape_slam

@@ -1,0 +1,406 @@
+#include "shape_slam/shape_matcher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+#include <tuple>
+
+#include "shape_slam/geometry.h"
+
+namespace shape_slam {
+namespace {
+
+// A sample of a perceived polyline with the direction of its segment.
+struct DirectedSample {
+  Point2 point;
+  Point2 direction;  // unit vector
+};
+
+// Samples at the centres of equal pieces of every segment (at least one per segment).
+std::vector<DirectedSample> SampleWithDirections(const Polyline& polyline, double spacing_m) {
+  std::vector<DirectedSample> samples;
+  for (std::size_t i = 0; i + 1 < polyline.size(); ++i) {
+    const Point2 d = polyline[i + 1] - polyline[i];
+    const double length = d.norm();
+    if (length <= 0.0) continue;
+    const int n = std::max(1, static_cast<int>(std::ceil(length / spacing_m)));
+    for (int k = 0; k < n; ++k) {
+      samples.push_back({polyline[i] + d * ((k + 0.5) / n), d / length});
+    }
+  }
+  return samples;
+}
+
+Polyline Concatenate(const std::vector<Polyline>& polylines, int first, int count) {
+  Polyline out;
+  const int n = static_cast<int>(polylines.size());
+  for (int k = 0; k < count; ++k) {
+    const Polyline& p = polylines[(first + k) % n];
+    out.insert(out.end(), p.begin(), p.end());
+  }
+  return out;
+}
+
+// How well the estimate lays a perceived polyline onto a model polyline, over their overlap.
+struct Misfit {
+  double rms_m = 0.0;
+  double angle_rms_rad = 0.0;
+  double overlap_m = 0.0;
+};
+
+Misfit MeasureMisfit(const std::vector<DirectedSample>& samples_scan, double perceived_length_m,
+                     const Polyline& model, const Pose2& T_model_scan) {
+  Misfit misfit;
+  if (samples_scan.empty() || model.size() < 2) return misfit;
+  const Eigen::Matrix2d R = T_model_scan.Rotation();
+  double sum_d2 = 0.0, sum_a2 = 0.0;
+  int overlapping = 0;
+  const std::size_t last_segment = model.size() - 2;
+  for (const DirectedSample& s : samples_scan) {
+    const PolylineProjection proj = ProjectOntoPolyline(T_model_scan * s.point, model);
+    const bool at_open_end = (proj.segment == 0 && proj.t <= 0.0) ||
+                             (proj.segment == last_segment && proj.t >= 1.0);
+    if (at_open_end) continue;
+    const Point2 model_dir = model[proj.segment + 1] - model[proj.segment];
+    const Point2 dir = R * s.direction;
+    const double angle = std::atan2(dir.x() * model_dir.y() - dir.y() * model_dir.x(),
+                                    dir.dot(model_dir));
+    sum_d2 += proj.squared_distance;
+    sum_a2 += angle * angle;
+    ++overlapping;
+  }
+  if (overlapping == 0) return misfit;
+  misfit.rms_m = std::sqrt(sum_d2 / overlapping);
+  misfit.angle_rms_rad = std::sqrt(sum_a2 / overlapping);
+  misfit.overlap_m = perceived_length_m * overlapping / samples_scan.size();
+  return misfit;
+}
+
+using GroupKey = std::tuple<int, int, int, int>;
+
+// Group polylines, their samples and S* values, computed once per group pair and shared by all
+// passes and seeds (S* does not depend on the pose estimate).
+class PairEvaluator {
+ public:
+  PairEvaluator(const ShapeMatchInput& input, const ShapeMatcherParams& params)
+      : input_(input), params_(params) {}
+
+  const Polyline& ScanGroup(int first, int count) { return Group(scan_groups_, input_.scan, first, count); }
+  const Polyline& ModelGroup(int first, int count) {
+    return Group(model_groups_, input_.model, first, count);
+  }
+
+  const EvolvedSimilarity& SStar(int i, int gs, int j, int gm) {
+    const GroupKey key{i, gs, j, gm};
+    auto it = s_star_.find(key);
+    if (it == s_star_.end()) {
+      it = s_star_.emplace(key, ComputeEvolvedSimilarity(ScanGroup(i, gs), ModelGroup(j, gm),
+                                                         params_.similarity)).first;
+    }
+    return it->second;
+  }
+
+  // D of eq. (4) against an estimate, or nullopt when a gate rejects the pair.
+  std::optional<double> Deviation(int i, int gs, int j, int gm, const Pose2& T_model_scan) {
+    const Polyline& scan = ScanGroup(i, gs);
+    const auto key = std::make_pair(i, gs);
+    auto it = samples_.find(key);
+    if (it == samples_.end()) {
+      it = samples_.emplace(key, SampleWithDirections(scan, params_.deviation_sample_spacing_m))
+               .first;
+    }
+    const Polyline& model = ModelGroup(j, gm);
+    const double scan_length = PolylineLength(scan);
+    const Misfit m = MeasureMisfit(it->second, scan_length, model, T_model_scan);
+    const double shorter = std::min(scan_length, PolylineLength(model));
+    if (m.overlap_m <= 0.0 || m.overlap_m < params_.min_overlap_fraction * shorter ||
+        m.rms_m > params_.max_misfit_m || m.angle_rms_rad > params_.max_angle_rad) {
+      return std::nullopt;
+    }
+    const double dt = m.rms_m / params_.deviation_sigma_m;
+    const double dr = m.angle_rms_rad / params_.deviation_sigma_rad;
+    return params_.deviation_weight * (dt * dt + dr * dr);
+  }
+
+ private:
+  const Polyline& Group(std::map<std::pair<int, int>, Polyline>& cache,
+                        const std::vector<Polyline>& polylines, int first, int count) {
+    const auto key = std::make_pair(first, count);
+    auto it = cache.find(key);
+    if (it == cache.end()) it = cache.emplace(key, Concatenate(polylines, first, count)).first;
+    return it->second;
+  }
+
+  const ShapeMatchInput& input_;
+  const ShapeMatcherParams& params_;
+  std::map<std::pair<int, int>, Polyline> scan_groups_, model_groups_;
+  std::map<std::pair<int, int>, std::vector<DirectedSample>> samples_;
+  std::map<GroupKey, EvolvedSimilarity> s_star_;
+};
+
+std::vector<double> SkipPenalties(const std::vector<Polyline>& polylines, double per_m) {
+  std::vector<double> penalties;
+  penalties.reserve(polylines.size());
+  for (const Polyline& p : polylines) penalties.push_back(per_m * PolylineLength(p));
+  return penalties;
+}
+
+// One pass of eq. (4): with an estimate, cost = S* + D and gated pairs are forbidden; without,
+// cost = S* (the first pass of §4.3).
+CorrespondenceSolution SolvePass(const ShapeMatchInput& input, const ShapeMatcherParams& params,
+                                 PairEvaluator& evaluator, const std::optional<Pose2>& estimate,
+                                 int max_group_size) {
+  CorrespondenceProblem problem;
+  problem.scan_skip_penalty = SkipPenalties(input.scan, params.skip_penalty_per_m);
+  problem.model_skip_penalty = SkipPenalties(input.model, params.skip_penalty_per_m);
+  problem.model_cyclic = input.model_cyclic;
+  problem.max_group_size = max_group_size;
+  problem.group_cost = [&](int i, int gs, int j, int gm) -> std::optional<double> {
+    if (evaluator.ScanGroup(i, gs).size() < 2 || evaluator.ModelGroup(j, gm).size() < 2) {
+      return std::nullopt;  // a single point has no shape
+    }
+    double deviation = 0.0;
+    if (estimate) {
+      const std::optional<double> d = evaluator.Deviation(i, gs, j, gm, *estimate);
+      if (!d) return std::nullopt;  // gated before paying for S*
+      deviation = *d;
+    }
+    return evaluator.SStar(i, gs, j, gm).value + deviation;
+  };
+  return SolveCorrespondence(problem);
+}
+
+const std::vector<Polyline>& AlignmentPolylines(const ShapeMatchInput& input) {
+  return input.scan_fine.empty() ? input.scan : input.scan_fine;
+}
+
+// §5.1: ICP restricted to the matched shapes.
+AlignmentResult AlignMatches(const ShapeMatchInput& input, const std::vector<GroupMatch>& matches,
+                             const Pose2& T_model_scan_init, const AlignmentParams& params) {
+  const std::vector<Polyline>& perceived = AlignmentPolylines(input);
+  const int num_model = static_cast<int>(input.model.size());
+  std::vector<ShapePair> pairs;
+  for (const GroupMatch& m : matches) {
+    std::vector<Polyline> model;
+    for (int k = 0; k < m.model_count; ++k) model.push_back(input.model[m.ModelIndex(k, num_model)]);
+    for (int k = 0; k < m.scan_count; ++k) pairs.push_back({perceived[m.scan_first + k], model, 1.0});
+  }
+  return AlignShapes(pairs, T_model_scan_init, params);
+}
+
+// Fraction of the scan's samples that lie within `distance_m` of any model polyline.
+double InlierRatio(const ShapeMatchInput& input, const Pose2& T_model_scan, double distance_m) {
+  const double d2_max = distance_m * distance_m;
+  int total = 0, inliers = 0;
+  for (const Polyline& polyline : AlignmentPolylines(input)) {
+    for (const DirectedSample& s : SampleWithDirections(polyline, 0.1)) {
+      ++total;
+      const Point2 p = T_model_scan * s.point;
+      for (const Polyline& model : input.model) {
+        if (!model.empty() && ProjectOntoPolyline(p, model).squared_distance <= d2_max) {
+          ++inliers;
+          break;
+        }
+      }
+    }
+  }
+  return total == 0 ? 0.0 : static_cast<double>(inliers) / total;
+}
+
+ShapeMatchResult Finish(const ShapeMatchInput& input, const ShapeMatcherParams& params,
+                        CorrespondenceSolution solution, const Pose2& T_model_scan_init) {
+  ShapeMatchResult result;
+  result.alignment = AlignMatches(input, solution.matches, T_model_scan_init, params.alignment);
+  result.T_model_scan = solution.matches.empty() ? T_model_scan_init : result.alignment.T_map_scan;
+  result.matches = std::move(solution.matches);
+  result.total_cost = solution.total_cost;
+  result.inlier_ratio = InlierRatio(input, result.T_model_scan, params.inlier_distance_m);
+  return result;
+}
+
+// A seed candidate of §4.3: a pair matched in the first pass, with its reliability Q (eq. 5).
+struct Seed {
+  GroupMatch match;
+  double reliability = 0.0;
+};
+
+std::vector<Seed> MostReliablePairs(const CorrespondenceSolution& first_pass,
+                                    PairEvaluator& evaluator, int count) {
+  std::vector<Seed> seeds;
+  for (const GroupMatch& m : first_pass.matches) {
+    const Polyline& p = evaluator.ScanGroup(m.scan_first, m.scan_count);
+    const Polyline& q = evaluator.ModelGroup(m.model_first, m.model_count);
+    const double s_star = evaluator.SStar(m.scan_first, m.scan_count, m.model_first, m.model_count).value;
+    seeds.push_back({m, Reliability(p, q, s_star)});
+  }
+  std::stable_sort(seeds.begin(), seeds.end(),
+                   [](const Seed& a, const Seed& b) { return a.reliability > b.reliability; });
+  if (static_cast<int>(seeds.size()) > count) seeds.resize(count);
+  return seeds;
+}
+
+// Candidate estimates of §4.3: the alignments induced by the most reliable pairs of the first
+// pass, then the caller's hints.
+struct Candidate {
+  Pose2 T_model_scan;
+  double reliability = std::numeric_limits<double>::quiet_NaN();
+};
+
+std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
+                                      const ShapeMatcherParams& params, PairEvaluator& evaluator) {
+  const CorrespondenceSolution first =
+      SolvePass(input, params, evaluator, std::nullopt, params.first_pass_group_size);
+  std::vector<Candidate> candidates;
+  for (const Seed& seed : MostReliablePairs(first, evaluator, params.num_seeds)) {
+    const GroupMatch& m = seed.match;
+    const AlignmentResult induced =
+        InducedAlignment(evaluator.ScanGroup(m.scan_first, m.scan_count),
+                         evaluator.ModelGroup(m.model_first, m.model_count), params.alignment);
+    candidates.push_back({induced.T_map_scan, seed.reliability});
+  }
+  for (const Pose2& hint : input.hint_estimates) candidates.push_back({hint});
+  return candidates;
+}
+
+// §4.3: two passes, the second against each candidate estimate; the best final fit wins (most
+// inliers, then lowest eq. (4) cost).
+ShapeMatchResult MatchWithoutGuess(const ShapeMatchInput& input, const ShapeMatcherParams& params,
+                                   PairEvaluator& evaluator) {
+  ShapeMatchResult best;
+  bool have_best = false;
+  for (const Candidate& candidate : SeedCandidates(input, params, evaluator)) {
+    CorrespondenceSolution second =
+        SolvePass(input, params, evaluator, candidate.T_model_scan, params.max_group_size);
+    ShapeMatchResult result = Finish(input, params, std::move(second), candidate.T_model_scan);
+    result.reliability = candidate.reliability;
+    const bool better = !have_best || result.inlier_ratio > best.inlier_ratio + 1e-12 ||
+                        (std::abs(result.inlier_ratio - best.inlier_ratio) <= 1e-12 &&
+                         result.total_cost < best.total_cost);
+    if (better) {
+      best = std::move(result);
+      have_best = true;
+    }
+  }
+  if (!have_best) best.inlier_ratio = InlierRatio(input, best.T_model_scan, params.inlier_distance_m);
+  return best;
+}
+
+// Rigid transform minimising sum w |T a_i - b_i|^2 (2D Procrustes without scale).
+Pose2 FitRigid(const std::vector<Point2>& a, const std::vector<Point2>& b) {
+  Point2 ca = Point2::Zero(), cb = Point2::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  double sxx = 0.0, sxy = 0.0;  // sum of dot and cross products of the centred points
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Point2 p = a[i] - ca, q = b[i] - cb;
+    sxx += p.dot(q);
+    sxy += p.x() * q.y() - p.y() * q.x();
+  }
+  const double theta = std::atan2(sxy, sxx);
+  const Pose2 rotation(0.0, 0.0, theta);
+  const Point2 t = cb - rotation * ca;
+  return {t.x(), t.y(), theta};
+}
+
+// Points at equal fractions of the arc length of a polyline (both ends included).
+std::vector<Point2> EqualArcLengthPoints(const Polyline& polyline, int count) {
+  std::vector<Point2> points;
+  const double total = PolylineLength(polyline);
+  std::size_t segment = 0;
+  double walked = 0.0;
+  for (int k = 0; k < count; ++k) {
+    const double target = total * k / (count - 1);
+    while (segment + 2 < polyline.size() &&
+           walked + (polyline[segment + 1] - polyline[segment]).norm() < target) {
+      walked += (polyline[segment + 1] - polyline[segment]).norm();
+      ++segment;
+    }
+    const Point2 d = polyline[segment + 1] - polyline[segment];
+    const double length = d.norm();
+    const double t = length > 0.0 ? std::clamp((target - walked) / length, 0.0, 1.0) : 0.0;
+    points.push_back(polyline[segment] + t * d);
+  }
+  return points;
+}
+
+}  // namespace
+
+void ShapeMatcherParams::Validate() const {
+  similarity.Validate();
+  alignment.Validate();
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      throw std::invalid_argument(std::string("ShapeMatcherParams::") + name + " must be > 0");
+    }
+  };
+  positive(skip_penalty_per_m, "skip_penalty_per_m");
+  positive(deviation_sigma_m, "deviation_sigma_m");
+  positive(deviation_sigma_rad, "deviation_sigma_rad");
+  positive(max_misfit_m, "max_misfit_m");
+  positive(max_angle_rad, "max_angle_rad");
+  positive(inlier_distance_m, "inlier_distance_m");
+  positive(deviation_sample_spacing_m, "deviation_sample_spacing_m");
+  if (!(deviation_weight >= 0.0) || !std::isfinite(deviation_weight)) {
+    throw std::invalid_argument("ShapeMatcherParams::deviation_weight must be >= 0");
+  }
+  if (!(min_overlap_fraction >= 0.0 && min_overlap_fraction <= 1.0)) {
+    throw std::invalid_argument("ShapeMatcherParams::min_overlap_fraction must be in [0, 1]");
+  }
+  if (max_group_size < 1 || first_pass_group_size < 1) {
+    throw std::invalid_argument("ShapeMatcherParams: group sizes must be >= 1");
+  }
+  if (num_seeds < 1) throw std::invalid_argument("ShapeMatcherParams::num_seeds must be >= 1");
+}
+
+AlignmentResult InducedAlignment(const Polyline& perceived, const Polyline& model,
+                                 const AlignmentParams& params) {
+  AlignmentResult best;
+  if (perceived.size() < 2 || model.size() < 2) return best;
+  constexpr int kPoints = 16;
+  const std::vector<Point2> a = EqualArcLengthPoints(perceived, kPoints);
+  const std::vector<Point2> b = EqualArcLengthPoints(model, kPoints);
+  // Rotation from the equal-arc-length fit; translations aligning start, end and centre.
+  const Pose2 fit = FitRigid(a, b);
+  std::vector<Pose2> initial = {fit};
+  for (const int k : {0, kPoints - 1, kPoints / 2}) {
+    const Point2 t = b[k] - Pose2(0, 0, fit.theta) * a[k];
+    initial.emplace_back(t.x(), t.y(), fit.theta);
+  }
+  const std::vector<ShapePair> pair = {{perceived, {model}, 1.0}};
+  bool have = false;
+  for (const Pose2& T0 : initial) {
+    AlignmentResult r = AlignShapes(pair, T0, params);
+    if (r.num_correspondences == 0) continue;
+    // More samples inside the (self-tightening) gate first: a wrong fit keeps few of them.
+    const bool better = !have || r.num_correspondences > best.num_correspondences ||
+                        (r.num_correspondences == best.num_correspondences &&
+                         r.rms_error_m < best.rms_error_m);
+    if (better) {
+      best = r;
+      have = true;
+    }
+  }
+  if (!have) best.T_map_scan = fit;
+  return best;
+}
+
+ShapeMatchResult MatchShapes(const ShapeMatchInput& input,
+                             const std::optional<Pose2>& T_model_scan_guess,
+                             const ShapeMatcherParams& params) {
+  params.Validate();
+  if (!input.scan_fine.empty() && input.scan_fine.size() != input.scan.size()) {
+    throw std::invalid_argument("MatchShapes: scan_fine must be empty or match scan in size");
+  }
+  PairEvaluator evaluator(input, params);
+  if (!T_model_scan_guess) return MatchWithoutGuess(input, params, evaluator);
+  CorrespondenceSolution solution =
+      SolvePass(input, params, evaluator, *T_model_scan_guess, params.max_group_size);
+  ShapeMatchResult result = Finish(input, params, std::move(solution), *T_model_scan_guess);
+  result.used_guess = true;
+  return result;
+}
+
+}  // namespace shape_slam

@@ -1,0 +1,280 @@
+#include "shape_slam/visibility.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include "shape_slam/geometry.h"
+
+namespace shape_slam {
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// The angular sweep's bins over the field of view.
+struct Sweep {
+  double start = -M_PI;  // bearing of the right edge of bin 0
+  double width = 0.0;    // bin width
+  int bins = 0;
+  bool full_circle = true;
+
+  double Edge(int k) const { return start + k * width; }
+  // Bearing relative to the start, in [0, 2 pi).
+  double Offset(double bearing) const {
+    double o = std::fmod(bearing - start, 2.0 * M_PI);
+    return o < 0.0 ? o + 2.0 * M_PI : o;
+  }
+};
+
+Sweep MakeSweep(const VisibilityParams& params) {
+  Sweep s;
+  s.full_circle = params.fov_rad >= 2.0 * M_PI - 1e-9;
+  const double fov = s.full_circle ? 2.0 * M_PI : params.fov_rad;
+  s.bins = std::max(1, static_cast<int>(std::ceil(fov / params.angular_resolution_rad)));
+  s.width = fov / s.bins;
+  s.start = s.full_circle ? -M_PI : -fov / 2.0;
+  return s;
+}
+
+// Distance along the ray of bearing phi from the origin to the line through a, b, and the
+// parameter t of the hit on [a, b]; nullopt when the ray is parallel or points away.
+struct RayHit {
+  double depth;
+  double t;
+};
+std::optional<RayHit> Intersect(double phi, const Point2& a, const Point2& b) {
+  const Point2 u(std::cos(phi), std::sin(phi));
+  const Point2 d = b - a;
+  const double denom = u.x() * d.y() - u.y() * d.x();
+  if (std::abs(denom) < 1e-15) return std::nullopt;
+  const double r = (a.x() * d.y() - a.y() * d.x()) / denom;
+  const double t = (a.x() * u.y() - a.y() * u.x()) / denom;
+  if (r <= 0.0) return std::nullopt;
+  return RayHit{r, t};
+}
+
+// A segment in the sensor frame, clipped to the range disc, with its bins.
+struct SweptSegment {
+  PolylineId polyline;
+  std::uint32_t segment;
+  Point2 a, b;             // sensor frame, the whole segment
+  double t0 = 0, t1 = 1;   // the part inside the range disc
+  int first_bin = 0, num_bins = 0;
+};
+
+// Parameter interval of [a, b] inside the disc of radius r around the origin.
+bool ClipToDisc(const Point2& a, const Point2& b, double r, double& t0, double& t1) {
+  const Point2 d = b - a;
+  const double qa = d.squaredNorm(), qb = 2.0 * a.dot(d), qc = a.squaredNorm() - r * r;
+  if (qa <= 0.0) return qc <= 0.0;
+  const double disc = qb * qb - 4.0 * qa * qc;
+  if (disc < 0.0) return false;
+  const double sq = std::sqrt(disc);
+  t0 = std::max(0.0, (-qb - sq) / (2.0 * qa));
+  t1 = std::min(1.0, (-qb + sq) / (2.0 * qa));
+  return t0 < t1;
+}
+
+// The bins spanned by a segment part (nullopt if outside the field of view or degenerate).
+bool AssignBins(const Sweep& sweep, SweptSegment& s) {
+  const Point2 p0 = s.a + s.t0 * (s.b - s.a), p1 = s.a + s.t1 * (s.b - s.a);
+  if (p0.norm() < 1e-9 || p1.norm() < 1e-9) return false;  // passes through the viewpoint
+  double b0 = std::atan2(p0.y(), p0.x());
+  const double span = NormalizeAngle(std::atan2(p1.y(), p1.x()) - b0);
+  double lo = sweep.Offset(span >= 0 ? b0 : b0 + span);
+  double hi = lo + std::abs(span);
+  const double fov = sweep.bins * sweep.width;
+  if (!sweep.full_circle) {
+    if (lo >= fov && hi < 2.0 * M_PI) return false;
+    if (lo >= fov) {  // starts before the right edge and wraps into the view
+      lo -= 2.0 * M_PI;
+      hi -= 2.0 * M_PI;
+    }
+    lo = std::max(lo, 0.0);
+    hi = std::min(hi, fov);
+    if (hi <= lo) return false;
+  }
+  s.first_bin = static_cast<int>(std::floor(lo / sweep.width));
+  const int last_bin = static_cast<int>(std::floor(std::nextafter(hi, -kInf) / sweep.width));
+  s.num_bins = last_bin - s.first_bin + 1;
+  return s.num_bins > 0;
+}
+
+// Depth of a segment part in bin k: along the centre ray, or its nearer end if the ray misses.
+double DepthInBin(const Sweep& sweep, const SweptSegment& s, int k) {
+  const double phi = sweep.Edge(k % sweep.bins) + 0.5 * sweep.width;
+  const auto hit = Intersect(phi, s.a, s.b);
+  if (hit && hit->t >= s.t0 && hit->t <= s.t1) return hit->depth;
+  const Point2 p0 = s.a + s.t0 * (s.b - s.a), p1 = s.a + s.t1 * (s.b - s.a);
+  return std::min(p0.norm(), p1.norm());
+}
+
+std::vector<SweptSegment> GatherSegments(
+    const std::unordered_map<PolylineId, Polyline>& polylines, const SegmentIndex& index,
+    const Pose2& T_map_sensor, const VisibilityParams& params, const Sweep& sweep) {
+  const Pose2 T_sensor_map = T_map_sensor.Inverse();
+  std::vector<SweptSegment> out;
+  for (const SegmentRef& ref : index.QueryDisc(T_map_sensor.Translation(), params.max_range_m)) {
+    const auto it = polylines.find(ref.polyline);
+    if (it == polylines.end() || ref.segment + 1 >= it->second.size()) continue;
+    SweptSegment s{ref.polyline, ref.segment, T_sensor_map * it->second[ref.segment],
+                   T_sensor_map * it->second[ref.segment + 1]};
+    if ((s.b - s.a).squaredNorm() <= 0.0) continue;
+    if (!ClipToDisc(s.a, s.b, params.max_range_m, s.t0, s.t1)) continue;
+    if (AssignBins(sweep, s)) out.push_back(s);
+  }
+  return out;
+}
+
+// Visible parameter intervals [ta, tb] of a segment, clipped at the bin edge rays.
+using Intervals = std::vector<std::pair<double, double>>;
+
+Intervals VisibleIntervals(const Sweep& sweep, const SweptSegment& s,
+                           const std::vector<double>& zbuffer, double tolerance) {
+  const Point2 d = s.b - s.a;
+  const bool ccw = s.a.x() * d.y() - s.a.y() * d.x() > 0.0;  // bearing grows with t
+  Intervals out;
+  for (int j = 0; j < s.num_bins; ++j) {
+    const int bin = s.first_bin + j;
+    if (DepthInBin(sweep, s, bin) > zbuffer[bin % sweep.bins] + tolerance) continue;
+    double t_low = ccw ? s.t0 : s.t1, t_high = ccw ? s.t1 : s.t0;  // t at the lower/upper edge
+    if (const auto hit = Intersect(sweep.Edge(bin), s.a, s.b)) t_low = std::clamp(hit->t, s.t0, s.t1);
+    if (const auto hit = Intersect(sweep.Edge(bin + 1), s.a, s.b)) t_high = std::clamp(hit->t, s.t0, s.t1);
+    const double ta = std::min(t_low, t_high), tb = std::max(t_low, t_high);
+    if (tb <= ta) continue;
+    out.emplace_back(ta, tb);
+  }
+  std::sort(out.begin(), out.end());
+  Intervals merged;
+  for (const auto& iv : out) {
+    if (!merged.empty() && iv.first <= merged.back().second + 1e-9) {
+      merged.back().second = std::max(merged.back().second, iv.second);
+    } else {
+      merged.push_back(iv);
+    }
+  }
+  return merged;
+}
+
+std::vector<double> BuildZBuffer(const Sweep& sweep, const std::vector<SweptSegment>& segments) {
+  std::vector<double> zbuffer(sweep.bins, kInf);
+  for (const SweptSegment& s : segments) {
+    for (int j = 0; j < s.num_bins; ++j) {
+      double& z = zbuffer[(s.first_bin + j) % sweep.bins];
+      z = std::min(z, DepthInBin(sweep, s, s.first_bin + j));
+    }
+  }
+  return zbuffer;
+}
+
+// Sum of the bearing increments along a polyline (positive: counter-clockwise).
+double TurnedBearing(const Polyline& p) {
+  double total = 0.0;
+  for (std::size_t i = 0; i + 1 < p.size(); ++i) {
+    total += NormalizeAngle(std::atan2(p[i + 1].y(), p[i + 1].x()) - std::atan2(p[i].y(), p[i].x()));
+  }
+  return total;
+}
+
+// Assembles visible intervals into pieces that follow their source polyline, continuing a
+// piece across a vertex when both sides are visible.
+class PieceBuilder {
+ public:
+  PieceBuilder(const VisibilityParams& params, std::vector<VisiblePolyline>& out)
+      : params_(params), out_(out) {}
+
+  void Add(const SweptSegment& s, double from_m, double length_m, double ta, double tb) {
+    const Point2 pa = s.a + ta * (s.b - s.a), pb = s.a + tb * (s.b - s.a);
+    const bool continues = open_ && current_.source == s.polyline && s.segment == last_segment_ + 1 &&
+                           last_t_ >= 1.0 - 1e-9 && ta <= 1e-9;
+    if (!continues) {
+      Close();
+      current_ = VisiblePolyline{{pa}, s.polyline, from_m + ta * length_m, 0.0, false};
+      open_ = true;
+    }
+    current_.points_sensor.push_back(pb);
+    current_.source_to_m = from_m + tb * length_m;
+    last_segment_ = s.segment;
+    last_t_ = tb;
+  }
+
+  void Close() {
+    if (!open_) return;
+    open_ = false;
+    if (PolylineLength(current_.points_sensor) < params_.min_piece_length_m) return;
+    if (TurnedBearing(current_.points_sensor) < 0.0) {
+      std::reverse(current_.points_sensor.begin(), current_.points_sensor.end());
+      current_.reversed = true;
+    }
+    out_.push_back(std::move(current_));
+  }
+
+ private:
+  const VisibilityParams& params_;
+  std::vector<VisiblePolyline>& out_;
+  VisiblePolyline current_;
+  bool open_ = false;
+  std::uint32_t last_segment_ = 0;
+  double last_t_ = 0.0;
+};
+
+}  // namespace
+
+void VisibilityParams::Validate() const {
+  auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      throw std::invalid_argument(std::string("VisibilityParams::") + name + " must be > 0");
+    }
+  };
+  positive(max_range_m, "max_range_m");
+  positive(fov_rad, "fov_rad");
+  positive(angular_resolution_rad, "angular_resolution_rad");
+  if (!(min_piece_length_m >= 0.0) || !(depth_tolerance_m >= 0.0)) {
+    throw std::invalid_argument(
+        "VisibilityParams::min_piece_length_m and depth_tolerance_m must be >= 0");
+  }
+  if (angular_resolution_rad > fov_rad) {
+    throw std::invalid_argument("VisibilityParams::angular_resolution_rad exceeds fov_rad");
+  }
+}
+
+std::vector<VisiblePolyline> ComputeVisibleShape(
+    const std::unordered_map<PolylineId, Polyline>& polylines_map, const SegmentIndex& index,
+    const Pose2& T_map_sensor, const VisibilityParams& params) {
+  params.Validate();
+  const Sweep sweep = MakeSweep(params);
+  const std::vector<SweptSegment> segments =
+      GatherSegments(polylines_map, index, T_map_sensor, params, sweep);
+  const std::vector<double> zbuffer = BuildZBuffer(sweep, segments);
+  std::vector<VisiblePolyline> out;
+  PieceBuilder builder(params, out);
+  PolylineId cumulative_of = 0;
+  std::vector<double> cumulative;  // arc length at each vertex of the current source polyline
+  for (const SweptSegment& s : segments) {  // sorted by polyline, then segment
+    if (cumulative.empty() || cumulative_of != s.polyline) {
+      const Polyline& p = polylines_map.at(s.polyline);
+      cumulative.assign(1, 0.0);
+      for (std::size_t i = 0; i + 1 < p.size(); ++i) cumulative.push_back(cumulative.back() + (p[i + 1] - p[i]).norm());
+      cumulative_of = s.polyline;
+    }
+    const double length = (s.b - s.a).norm();
+    for (const auto& [ta, tb] : VisibleIntervals(sweep, s, zbuffer, params.depth_tolerance_m)) {
+      builder.Add(s, cumulative[s.segment], length, ta, tb);
+    }
+  }
+  builder.Close();
+  auto key = [&](const VisiblePolyline& v) {
+    const Point2& p = v.points_sensor.front();
+    return sweep.Offset(std::atan2(p.y(), p.x()));
+  };
+  std::stable_sort(out.begin(), out.end(), [&](const VisiblePolyline& a, const VisiblePolyline& b) {
+    return key(a) < key(b);
+  });
+  return out;
+}
+
+}  // namespace shape_slam

@@ -1,0 +1,214 @@
+#include "shape_slam_io/params_ini.h"
+
+#include <cerrno>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+#include <variant>
+#include <vector>
+
+#include "shape_slam_io/json_writer.h"
+
+namespace shape_slam::io {
+namespace {
+
+// One ini key bound to a parameter field.
+struct Field {
+  const char* section;
+  const char* key;
+  const char* doc;
+  std::variant<double*, int*, bool*> target;
+};
+
+// Every tunable parameter of the mapper. fov_rad of the visibility is set per scan from the
+// scan's own field of view and is therefore not a key.
+std::vector<Field> Fields(ShapeSlamParams& p) {
+  return {
+      {"extraction", "max_gap_m", "split polylines where consecutive points are farther apart (m, paper §3.1: 0.20)", &p.extraction.max_gap_m},
+      {"extraction", "min_range_m", "readings at or below this are invalid (m)", &p.extraction.min_range_m},
+      {"extraction", "min_points", "polylines with fewer points are dropped", &p.extraction.min_points},
+      {"dce", "threshold_m", "DCE stop threshold on the relevance K of eq. (1) before shape matching (m)", &p.dce.threshold_m},
+      {"pipeline", "use_odometry", "predict poses from the log's odometry (false: paper §4.3 shape matching alone)", &p.use_odometry},
+      {"pipeline", "alignment_dce_threshold_m", "lighter DCE of the polylines whose samples drive the alignment (m)", &p.alignment_dce_threshold_m},
+      {"pipeline", "visibility_fov_margin_rad", "visible map shape = scan field of view widened by this on each side (rad)", &p.visibility_fov_margin_rad},
+      {"pipeline", "min_inlier_ratio", "a match is trusted when this fraction of the scan lies on the map after it", &p.min_inlier_ratio},
+      {"pipeline", "index_cell_size_m", "cell size of the map's spatial index (m)", &p.index_cell_size_m},
+      {"visibility", "max_range_m", "map polylines farther than this from the sensor are not visible (m)", &p.visibility.max_range_m},
+      {"visibility", "angular_resolution_rad", "angular resolution of the visibility sweep (rad)", &p.visibility.angular_resolution_rad},
+      {"visibility", "min_piece_length_m", "visible pieces shorter than this are dropped (m)", &p.visibility.min_piece_length_m},
+      {"visibility", "depth_tolerance_m", "depth tolerance of the occlusion test (m)", &p.visibility.depth_tolerance_m},
+      {"matcher", "lookahead", "S*: continue DCE while one of the next N removals improves similarity (paper §4.1: 3)", &p.matcher.similarity.lookahead},
+      {"matcher", "skip_penalty_per_m", "P of eq. (4): penalty per metre of an unmatched polyline", &p.matcher.skip_penalty_per_m},
+      {"matcher", "deviation_weight", "weight of D in eq. (4)", &p.matcher.deviation_weight},
+      {"matcher", "deviation_sigma_m", "D: scale of the RMS distance of a pair under the estimate (m)", &p.matcher.deviation_sigma_m},
+      {"matcher", "deviation_sigma_rad", "D: scale of the RMS direction difference of a pair (rad)", &p.matcher.deviation_sigma_rad},
+      {"matcher", "max_misfit_m", "pairs farther apart than this under the estimate are not matched (m)", &p.matcher.max_misfit_m},
+      {"matcher", "max_angle_rad", "pairs turned more than this under the estimate are not matched (rad)", &p.matcher.max_angle_rad},
+      {"matcher", "min_overlap_fraction", "a pair must overlap over this fraction of the shorter polyline", &p.matcher.min_overlap_fraction},
+      {"matcher", "max_group_size", "largest group in 1-to-many / many-to-1 correspondences", &p.matcher.max_group_size},
+      {"matcher", "num_seeds", "paper §4.3: most reliable pairs tried as seeds without odometry", &p.matcher.num_seeds},
+      {"matcher", "first_pass_group_size", "paper §4.3: largest group in the first pass", &p.matcher.first_pass_group_size},
+      {"matcher", "inlier_distance_m", "a scan sample within this of the map counts as an inlier (m)", &p.matcher.inlier_distance_m},
+      {"matcher", "deviation_sample_spacing_m", "spacing of the samples measuring D (m)", &p.matcher.deviation_sample_spacing_m},
+      {"alignment", "sample_spacing_m", "paper §5.1: sample the perceived polylines every (m)", &p.matcher.alignment.sample_spacing_m},
+      {"alignment", "max_iterations", "ICP iterations at most", &p.matcher.alignment.max_iterations},
+      {"alignment", "convergence_translation_m", "ICP stops when an update moves less than this (m) ...", &p.matcher.alignment.convergence_translation_m},
+      {"alignment", "convergence_rotation_rad", "... and turns less than this (rad)", &p.matcher.alignment.convergence_rotation_rad},
+      {"alignment", "max_correspondence_distance_m", "samples farther than this from their shape are ignored at first (m)", &p.matcher.alignment.max_correspondence_distance_m},
+      {"alignment", "min_correspondence_distance_m", "the gate shrinks to no less than this (m)", &p.matcher.alignment.min_correspondence_distance_m},
+      {"alignment", "reject_end_projections", "ignore samples projecting beyond a model polyline's open ends", &p.matcher.alignment.reject_end_projections},
+      {"refinement", "loss_scale_m", "Ceres robust loss scale (m)", &p.refinement.loss_scale_m},
+      {"refinement", "point_sigma_m", "standard deviation of a sample's distance to its wall (m)", &p.refinement.point_sigma_m},
+      {"refinement", "max_correspondence_distance_m", "association gate (m)", &p.refinement.max_correspondence_distance_m},
+      {"refinement", "outer_iterations", "association + solve rounds", &p.refinement.outer_iterations},
+      {"refinement", "max_solver_iterations", "Ceres iterations per round", &p.refinement.max_solver_iterations},
+      {"refinement", "min_correspondences", "fewer associated samples: the refinement is not trusted", &p.refinement.min_correspondences},
+      {"refinement", "sample_spacing_m", "sample spacing of the refinement (m)", &p.refinement.sample_spacing_m},
+      {"refinement", "reject_end_projections", "ignore samples projecting beyond a polyline's open ends", &p.refinement.reject_end_projections},
+      {"map_update", "dce_threshold_m", "DCE threshold of merged and added map polylines (m)", &p.map_update.dce_threshold_m},
+      {"map_update", "merge_sample_spacing_m", "bodies are averaged at points this far apart (m)", &p.map_update.merge_sample_spacing_m},
+      {"map_update", "min_incidence_rad", "rays meeting a body at a smaller angle pair points along the normal instead (rad)", &p.map_update.min_incidence_rad},
+      {"map_update", "max_support", "cap of a vertex's support (weight of the map in the average)", &p.map_update.max_support},
+      {"map_update", "merge_max_misfit_m", "merge when the RMS distance over the overlap is at most (m)", &p.map_update.merge_max_misfit_m},
+      {"map_update", "merge_max_angle_rad", "... the RMS direction difference at most (rad)", &p.map_update.merge_max_angle_rad},
+      {"map_update", "merge_min_overlap_m", "... and the overlap at least this long (m)", &p.map_update.merge_min_overlap_m},
+      {"map_update", "merge_min_overlap_fraction", "... or this fraction of the shorter polyline", &p.map_update.merge_min_overlap_fraction},
+      {"map_update", "min_new_length_m", "perceived polylines shorter than this are not added (m)", &p.map_update.min_new_length_m},
+      {"map_update", "contradiction_margin_m", "a reading this far beyond a map polyline contradicts it (m)", &p.map_update.contradiction_margin_m},
+      {"map_update", "drop_max_observations", "drop rule: polylines seen at most this often ...", &p.map_update.drop_max_observations},
+      {"map_update", "drop_min_contradictions", "... and contradicted at least this often are removed", &p.map_update.drop_min_contradictions},
+      {"keyframe", "min_translation_m", "update the map after moving this far since the last update (m)", &p.keyframe.min_translation_m},
+      {"keyframe", "min_rotation_rad", "... or turning this much (rad)", &p.keyframe.min_rotation_rad},
+      {"odometry_noise", "sigma_xy_m", "odometry prior: position standard deviation floor (m)", &p.odometry_noise.sigma_xy_m},
+      {"odometry_noise", "sigma_xy_per_m", "... plus this per metre travelled", &p.odometry_noise.sigma_xy_per_m},
+      {"odometry_noise", "sigma_theta_rad", "odometry prior: heading standard deviation floor (rad)", &p.odometry_noise.sigma_theta_rad},
+      {"odometry_noise", "sigma_theta_per_rad", "... plus this per radian turned", &p.odometry_noise.sigma_theta_per_rad},
+      {"odometry_noise", "sigma_theta_per_m", "... plus this per metre travelled", &p.odometry_noise.sigma_theta_per_m},
+  };
+}
+
+std::string Trim(const std::string& s) {
+  const std::size_t a = s.find_first_not_of(" \t\r");
+  if (a == std::string::npos) return "";
+  const std::size_t b = s.find_last_not_of(" \t\r");
+  return s.substr(a, b - a + 1);
+}
+
+// Drops an inline comment: '#' or ';' at the start or after whitespace.
+std::string StripComment(const std::string& line) {
+  for (std::size_t i = 0; i < line.size(); ++i) {
+    if ((line[i] == '#' || line[i] == ';') && (i == 0 || line[i - 1] == ' ' || line[i - 1] == '\t')) {
+      return line.substr(0, i);
+    }
+  }
+  return line;
+}
+
+void Assign(const Field& field, const std::string& value, const std::string& where) {
+  const std::string name = std::string(field.section) + "." + field.key;
+  auto bad = [&](const char* expected) {
+    return ConfigError(where + ": " + name + " = '" + value + "': expected " + expected);
+  };
+  errno = 0;
+  char* end = nullptr;
+  if (double* const* d = std::get_if<double*>(&field.target)) {
+    const double v = std::strtod(value.c_str(), &end);
+    if (value.empty() || *end != '\0' || errno == ERANGE || !std::isfinite(v)) throw bad("a finite number");
+    **d = v;
+  } else if (int* const* i = std::get_if<int*>(&field.target)) {
+    const long v = std::strtol(value.c_str(), &end, 10);
+    if (value.empty() || *end != '\0' || errno == ERANGE || v < -1000000000 || v > 1000000000) {
+      throw bad("an integer");
+    }
+    **i = static_cast<int>(v);
+  } else {
+    bool* b = std::get<bool*>(field.target);
+    if (value == "true" || value == "1" || value == "yes" || value == "on") {
+      *b = true;
+    } else if (value == "false" || value == "0" || value == "no" || value == "off") {
+      *b = false;
+    } else {
+      throw bad("true or false");
+    }
+  }
+}
+
+std::string ValueText(const Field& field) {
+  if (double* const* d = std::get_if<double*>(&field.target)) return FormatDouble(**d);
+  if (int* const* i = std::get_if<int*>(&field.target)) return std::to_string(**i);
+  return *std::get<bool*>(field.target) ? "true" : "false";
+}
+
+}  // namespace
+
+ShapeSlamParams ParseParamsIni(const std::string& text, const std::string& name,
+                               const ShapeSlamParams& defaults) {
+  ShapeSlamParams params = defaults;
+  const std::vector<Field> fields = Fields(params);
+  std::set<std::string> sections, seen;
+  for (const Field& f : fields) sections.insert(f.section);
+  std::istringstream in(text);
+  std::string line, section;
+  for (int number = 1; std::getline(in, line); ++number) {
+    const std::string where = name + ":" + std::to_string(number);
+    const std::string content = Trim(StripComment(line));
+    if (content.empty()) continue;
+    if (content.front() == '[') {
+      if (content.back() != ']') throw ConfigError(where + ": malformed section header '" + content + "'");
+      section = Trim(content.substr(1, content.size() - 2));
+      if (!sections.count(section)) throw ConfigError(where + ": unknown section [" + section + "]");
+      continue;
+    }
+    const std::size_t eq = content.find('=');
+    if (eq == std::string::npos) throw ConfigError(where + ": expected 'key = value', found '" + content + "'");
+    if (section.empty()) throw ConfigError(where + ": key outside of any [section]");
+    const std::string key = Trim(content.substr(0, eq)), value = Trim(content.substr(eq + 1));
+    const std::string full = section + "." + key;
+    const Field* field = nullptr;
+    for (const Field& f : fields) {
+      if (section == f.section && key == f.key) field = &f;
+    }
+    if (field == nullptr) throw ConfigError(where + ": unknown key '" + key + "' in [" + section + "]");
+    if (!seen.insert(full).second) throw ConfigError(where + ": " + full + " given twice");
+    Assign(*field, value, where);
+  }
+  try {
+    params.Validate();
+  } catch (const std::invalid_argument& e) {
+    throw ConfigError(name + ": invalid parameters: " + e.what());
+  }
+  return params;
+}
+
+ShapeSlamParams LoadParamsIni(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec)) throw ConfigError(path + ": is a directory");
+  std::ifstream in(path);
+  if (!in) throw ConfigError(path + ": cannot open the configuration file");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return ParseParamsIni(text.str(), path);
+}
+
+std::string FormatParamsIni(const ShapeSlamParams& params) {
+  ShapeSlamParams copy = params;
+  std::ostringstream out;
+  out << "# ShapeSLAM parameters (shape-slam run --config FILE.ini). Every key is optional: a\n"
+         "# missing key keeps the default shown here. Units are in the key names (_m metres,\n"
+         "# _rad radians). Unknown keys are errors. Paper sections refer to Wolter & Latecki,\n"
+         "# \"Shape-Based Robot Mapping\".\n";
+  std::string section;
+  for (const Field& f : Fields(copy)) {
+    if (section != f.section) {
+      section = f.section;
+      out << "\n[" << section << "]\n";
+    }
+    out << "# " << f.doc << "\n" << f.key << " = " << ValueText(f) << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace shape_slam::io
