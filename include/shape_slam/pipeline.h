@@ -55,6 +55,9 @@ struct ShapeSlamParams {
   double visibility_fov_margin_rad = 0.35;
   ShapeMatcherParams matcher;        ///< §4.2-§4.3 and the §5.1 ICP
   RefinementParams refinement;       ///< Ceres refinement after the restricted ICP
+  /// The refinement against the whole visible map first runs with this wider association gate
+  /// (metres), so that it converges from odometry-size errors, then with refinement's own.
+  double coarse_gate_m = 0.6;
   MapUpdateParams map_update;        ///< §5.2
   KeyframeParams keyframe;
   OdometryNoiseParams odometry_noise;

@@ -45,8 +45,12 @@ struct ShapeMatcherParams {
   double min_overlap_fraction = 0.3;
   /// Largest group of neighbouring polylines in a 1-to-many / many-to-1 correspondence.
   int max_group_size = 3;
-  /// §4.3 without an estimate: number of most reliable pairs tried as seeds.
+  /// §4.3 without an estimate: the alignments induced by the `max_seed_pairs` most reliable
+  /// pairs are scored by their fit, and the best `num_seeds` go through the second pass.
+  int max_seed_pairs = 12;
   int num_seeds = 3;
+  /// Polylines shorter than this do not seed (metres).
+  double min_seed_length_m = 0.3;
   /// §4.3 first pass: largest group (1 = only 1-to-1, which is all the seed needs).
   int first_pass_group_size = 1;
   /// A sample is an inlier of the final fit when it lies within this distance of the model.

@@ -122,6 +122,7 @@ void ShapeSlamParams::Validate() const {
     throw std::invalid_argument("ShapeSlamParams::min_inlier_ratio must be in [0, 1]");
   }
   Positive(index_cell_size_m, "ShapeSlamParams::index_cell_size_m");
+  Positive(coarse_gate_m, "ShapeSlamParams::coarse_gate_m");
 }
 
 ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
@@ -153,6 +154,20 @@ bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
 
 namespace {
 
+// Refines an estimate against every visible map polyline: with a wide gate first (odometry-size
+// errors), then with the configured one.
+RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
+                                  const std::vector<Polyline>& model, const Pose2& init,
+                                  const std::optional<PosePrior>& prior,
+                                  const ShapeSlamParams& params) {
+  RefinementParams coarse = params.refinement;
+  coarse.max_correspondence_distance_m =
+      std::max(params.coarse_gate_m, params.refinement.max_correspondence_distance_m);
+  coarse.loss_scale_m = std::max(coarse.loss_scale_m, params.coarse_gate_m / 4.0);
+  const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
+  return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
+}
+
 Localization Localize(const Shapes& shapes, const std::vector<VisiblePolyline>& visible,
                       const std::optional<Pose2>& odometry_delta,
                       const std::optional<Pose2>& velocity_hint_correction, bool model_cyclic,
@@ -172,19 +187,31 @@ Localization Localize(const Shapes& shapes, const std::vector<VisiblePolyline>& 
   const ShapeMatchResult match = MatchShapes(input, guess, params.matcher);
   Localization loc;
   loc.matched_pairs = static_cast<int>(match.matches.size());
-  loc.inlier_ratio = match.inlier_ratio;
-  loc.trusted = !match.matches.empty() && match.inlier_ratio >= params.min_inlier_ratio;
-  if (!loc.trusted) return loc;
   std::optional<PosePrior> prior;
   if (odometry_delta) {
     prior = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
   }
-  const RefinementResult refined =
-      RefineAlignment(AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m),
-                      input.model, match.T_model_scan, prior, params.refinement);
-  loc.correction = refined.converged ? refined.T_map_scan : match.T_model_scan;
-  loc.covariance = refined.covariance;
-  loc.rms_error_m = refined.converged ? refined.rms_error_m : match.alignment.rms_error_m;
+  // Candidates: the shape matcher's alignment, and the prediction itself when the shape match
+  // is weak; each is refined against the whole visible map and the best fit wins.
+  std::vector<Pose2> candidates;
+  if (!match.matches.empty()) candidates.push_back(match.T_model_scan);
+  if (match.inlier_ratio < 0.9 && guess) candidates.push_back(*guess);
+  const std::vector<Point2> samples =
+      AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
+  if (samples.empty()) return loc;
+  double best_ratio = -1.0;
+  for (const Pose2& candidate : candidates) {
+    const RefinementResult refined = RefineAgainstMap(samples, input.model, candidate, prior, params);
+    const double ratio = static_cast<double>(refined.num_residuals) / samples.size();
+    if (ratio <= best_ratio) continue;
+    best_ratio = ratio;
+    loc.correction = refined.converged ? refined.T_map_scan : candidate;
+    loc.covariance = refined.covariance;
+    loc.rms_error_m = refined.rms_error_m;
+    loc.inlier_ratio = ratio;
+    loc.trusted = refined.converged && ratio >= params.min_inlier_ratio;
+  }
+  if (!loc.trusted) loc.correction = Pose2();
   return loc;
 }
 

@@ -8,6 +8,7 @@
 #include <tuple>
 
 #include "shape_slam/geometry.h"
+#include "shape_slam/internal/model_segments.h"
 
 namespace shape_slam {
 namespace {
@@ -78,43 +79,52 @@ Misfit MeasureMisfit(const std::vector<DirectedSample>& samples_scan, double per
   return misfit;
 }
 
-using GroupKey = std::tuple<int, int, int, int>;
+// A group of consecutive polylines joined into one, with what the costs need of it.
+struct Group {
+  Polyline points;
+  double length_m = 0.0;
+  Point2 min = Point2::Zero(), max = Point2::Zero();  // bounding box
+  std::vector<DirectedSample> samples;                // for D (scan groups only)
+};
 
-// Group polylines, their samples and S* values, computed once per group pair and shared by all
-// passes and seeds (S* does not depend on the pose estimate).
+// Group polylines and S* values, computed once per group (pair) and shared by all passes and
+// seeds (S* does not depend on the pose estimate). Flat arrays indexed by (first, count).
 class PairEvaluator {
  public:
   PairEvaluator(const ShapeMatchInput& input, const ShapeMatcherParams& params)
-      : input_(input), params_(params) {}
+      : input_(input),
+        params_(params),
+        g_(std::max(params.max_group_size, params.first_pass_group_size)),
+        a_(static_cast<int>(input.scan.size())),
+        b_(static_cast<int>(input.model.size())),
+        scan_groups_(static_cast<std::size_t>(a_) * g_),
+        model_groups_(static_cast<std::size_t>(b_) * g_),
+        s_star_(static_cast<std::size_t>(a_) * g_ * b_ * g_) {}
 
-  const Polyline& ScanGroup(int first, int count) { return Group(scan_groups_, input_.scan, first, count); }
-  const Polyline& ModelGroup(int first, int count) {
-    return Group(model_groups_, input_.model, first, count);
+  const Group& ScanGroup(int first, int count) {
+    return Get(scan_groups_, input_.scan, first, count, true);
+  }
+  const Group& ModelGroup(int first, int count) {
+    return Get(model_groups_, input_.model, first, count, false);
   }
 
   const EvolvedSimilarity& SStar(int i, int gs, int j, int gm) {
-    const GroupKey key{i, gs, j, gm};
-    auto it = s_star_.find(key);
-    if (it == s_star_.end()) {
-      it = s_star_.emplace(key, ComputeEvolvedSimilarity(ScanGroup(i, gs), ModelGroup(j, gm),
-                                                         params_.similarity)).first;
+    std::optional<EvolvedSimilarity>& slot =
+        s_star_[((static_cast<std::size_t>(i) * g_ + gs - 1) * b_ + j) * g_ + gm - 1];
+    if (!slot) {
+      slot = ComputeEvolvedSimilarity(ScanGroup(i, gs).points, ModelGroup(j, gm).points,
+                                      params_.similarity);
     }
-    return it->second;
+    return *slot;
   }
 
   // D of eq. (4) against an estimate, or nullopt when a gate rejects the pair.
   std::optional<double> Deviation(int i, int gs, int j, int gm, const Pose2& T_model_scan) {
-    const Polyline& scan = ScanGroup(i, gs);
-    const auto key = std::make_pair(i, gs);
-    auto it = samples_.find(key);
-    if (it == samples_.end()) {
-      it = samples_.emplace(key, SampleWithDirections(scan, params_.deviation_sample_spacing_m))
-               .first;
-    }
-    const Polyline& model = ModelGroup(j, gm);
-    const double scan_length = PolylineLength(scan);
-    const Misfit m = MeasureMisfit(it->second, scan_length, model, T_model_scan);
-    const double shorter = std::min(scan_length, PolylineLength(model));
+    const Group& scan = ScanGroup(i, gs);
+    const Group& model = ModelGroup(j, gm);
+    if (!BoxesMeet(scan, model, T_model_scan)) return std::nullopt;  // cheap rejection first
+    const Misfit m = MeasureMisfit(scan.samples, scan.length_m, model.points, T_model_scan);
+    const double shorter = std::min(scan.length_m, model.length_m);
     if (m.overlap_m <= 0.0 || m.overlap_m < params_.min_overlap_fraction * shorter ||
         m.rms_m > params_.max_misfit_m || m.angle_rms_rad > params_.max_angle_rad) {
       return std::nullopt;
@@ -125,19 +135,43 @@ class PairEvaluator {
   }
 
  private:
-  const Polyline& Group(std::map<std::pair<int, int>, Polyline>& cache,
-                        const std::vector<Polyline>& polylines, int first, int count) {
-    const auto key = std::make_pair(first, count);
-    auto it = cache.find(key);
-    if (it == cache.end()) it = cache.emplace(key, Concatenate(polylines, first, count)).first;
-    return it->second;
+  const Group& Get(std::vector<std::optional<Group>>& cache, const std::vector<Polyline>& polylines,
+                   int first, int count, bool with_samples) {
+    std::optional<Group>& slot = cache[static_cast<std::size_t>(first) * g_ + count - 1];
+    if (!slot) {
+      Group group;
+      group.points = Concatenate(polylines, first, count);
+      group.length_m = PolylineLength(group.points);
+      group.min = group.max = group.points.empty() ? Point2::Zero() : group.points.front();
+      for (const Point2& p : group.points) group.min = group.min.cwiseMin(p), group.max = group.max.cwiseMax(p);
+      if (with_samples) {
+        group.samples = SampleWithDirections(group.points, params_.deviation_sample_spacing_m);
+      }
+      slot = std::move(group);
+    }
+    return *slot;
+  }
+
+  // Whether the scan group, moved by the estimate, comes within max_misfit_m of the model
+  // group's bounding box.
+  bool BoxesMeet(const Group& scan, const Group& model, const Pose2& T) const {
+    Point2 lo = Point2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+    for (const Point2 corner : {scan.min, scan.max, Point2(scan.min.x(), scan.max.y()),
+                                Point2(scan.max.x(), scan.min.y())}) {
+      const Point2 q = T * corner;
+      lo = lo.cwiseMin(q);
+      hi = hi.cwiseMax(q);
+    }
+    const double margin = params_.max_misfit_m;
+    return lo.x() <= model.max.x() + margin && hi.x() >= model.min.x() - margin &&
+           lo.y() <= model.max.y() + margin && hi.y() >= model.min.y() - margin;
   }
 
   const ShapeMatchInput& input_;
   const ShapeMatcherParams& params_;
-  std::map<std::pair<int, int>, Polyline> scan_groups_, model_groups_;
-  std::map<std::pair<int, int>, std::vector<DirectedSample>> samples_;
-  std::map<GroupKey, EvolvedSimilarity> s_star_;
+  int g_, a_, b_;
+  std::vector<std::optional<Group>> scan_groups_, model_groups_;
+  std::vector<std::optional<EvolvedSimilarity>> s_star_;
 };
 
 std::vector<double> SkipPenalties(const std::vector<Polyline>& polylines, double per_m) {
@@ -158,7 +192,7 @@ CorrespondenceSolution SolvePass(const ShapeMatchInput& input, const ShapeMatche
   problem.model_cyclic = input.model_cyclic;
   problem.max_group_size = max_group_size;
   problem.group_cost = [&](int i, int gs, int j, int gm) -> std::optional<double> {
-    if (evaluator.ScanGroup(i, gs).size() < 2 || evaluator.ModelGroup(j, gm).size() < 2) {
+    if (evaluator.ScanGroup(i, gs).points.size() < 2 || evaluator.ModelGroup(j, gm).points.size() < 2) {
       return std::nullopt;  // a single point has no shape
     }
     double deviation = 0.0;
@@ -190,76 +224,114 @@ AlignmentResult AlignMatches(const ShapeMatchInput& input, const std::vector<Gro
   return AlignShapes(pairs, T_model_scan_init, params);
 }
 
-// Fraction of the scan's samples that lie within `distance_m` of any model polyline.
-double InlierRatio(const ShapeMatchInput& input, const Pose2& T_model_scan, double distance_m) {
-  const double d2_max = distance_m * distance_m;
-  int total = 0, inliers = 0;
-  for (const Polyline& polyline : AlignmentPolylines(input)) {
-    for (const DirectedSample& s : SampleWithDirections(polyline, 0.1)) {
-      ++total;
-      const Point2 p = T_model_scan * s.point;
-      for (const Polyline& model : input.model) {
-        if (!model.empty() && ProjectOntoPolyline(p, model).squared_distance <= d2_max) {
-          ++inliers;
-          break;
-        }
+// Scores an estimate by the fraction of the scan's samples that lie within the inlier distance
+// of any model polyline (a grid over the model keeps each query cheap).
+class FitScorer {
+ public:
+  FitScorer(const ShapeMatchInput& input, const ShapeMatcherParams& params)
+      : grid_(internal::MakeModelSegments(input.model), params.inlier_distance_m) {
+    for (const Polyline& polyline : AlignmentPolylines(input)) {
+      for (const DirectedSample& s : SampleWithDirections(polyline, kSpacing)) {
+        samples_.push_back(s.point);
       }
     }
   }
-  return total == 0 ? 0.0 : static_cast<double>(inliers) / total;
-}
+
+  double InlierRatio(const Pose2& T_model_scan) const {
+    if (samples_.empty()) return 0.0;
+    int inliers = 0;
+    for (const Point2& p : samples_) inliers += grid_.Nearest(T_model_scan * p).segment >= 0 ? 1 : 0;
+    return static_cast<double>(inliers) / samples_.size();
+  }
+
+ private:
+  static constexpr double kSpacing = 0.1;  // metres
+  internal::SegmentGrid grid_;
+  std::vector<Point2> samples_;
+};
 
 ShapeMatchResult Finish(const ShapeMatchInput& input, const ShapeMatcherParams& params,
-                        CorrespondenceSolution solution, const Pose2& T_model_scan_init) {
+                        const FitScorer& scorer, CorrespondenceSolution solution,
+                        const Pose2& T_model_scan_init) {
   ShapeMatchResult result;
   result.alignment = AlignMatches(input, solution.matches, T_model_scan_init, params.alignment);
   result.T_model_scan = solution.matches.empty() ? T_model_scan_init : result.alignment.T_map_scan;
   result.matches = std::move(solution.matches);
   result.total_cost = solution.total_cost;
-  result.inlier_ratio = InlierRatio(input, result.T_model_scan, params.inlier_distance_m);
+  result.inlier_ratio = scorer.InlierRatio(result.T_model_scan);
   return result;
 }
 
-// A seed candidate of §4.3: a pair matched in the first pass, with its reliability Q (eq. 5).
+// A seed of §4.3: a 1-to-1 pair with its reliability Q (eq. 5).
 struct Seed {
-  GroupMatch match;
+  int scan = 0, model = 0;
   double reliability = 0.0;
 };
 
-std::vector<Seed> MostReliablePairs(const CorrespondenceSolution& first_pass,
-                                    PairEvaluator& evaluator, int count) {
-  std::vector<Seed> seeds;
+// The most reliable correspondences (§4.3, eq. 5). The paper selects among the pairs of the
+// first pass's matching; we rank them first and then every other 1-to-1 pair the first pass
+// evaluated, because a salient shape may be paired wrongly in the first pass when its
+// neighbours are ambiguous. Polylines shorter than min_seed_length_m carry too little shape.
+std::vector<Seed> MostReliablePairs(const ShapeMatchInput& input,
+                                    const CorrespondenceSolution& first_pass,
+                                    const ShapeMatcherParams& params, PairEvaluator& evaluator) {
+  std::vector<Seed> chosen, others;
+  auto seed_of = [&](int i, int j) {
+    return Seed{i, j, Reliability(input.scan[i], input.model[j], evaluator.SStar(i, 1, j, 1).value)};
+  };
   for (const GroupMatch& m : first_pass.matches) {
-    const Polyline& p = evaluator.ScanGroup(m.scan_first, m.scan_count);
-    const Polyline& q = evaluator.ModelGroup(m.model_first, m.model_count);
-    const double s_star = evaluator.SStar(m.scan_first, m.scan_count, m.model_first, m.model_count).value;
-    seeds.push_back({m, Reliability(p, q, s_star)});
+    if (m.scan_count == 1 && m.model_count == 1) chosen.push_back(seed_of(m.scan_first, m.model_first));
   }
-  std::stable_sort(seeds.begin(), seeds.end(),
-                   [](const Seed& a, const Seed& b) { return a.reliability > b.reliability; });
-  if (static_cast<int>(seeds.size()) > count) seeds.resize(count);
-  return seeds;
+  for (int i = 0; i < static_cast<int>(input.scan.size()); ++i) {
+    if (input.scan[i].size() < 2 || PolylineLength(input.scan[i]) < params.min_seed_length_m) continue;
+    for (int j = 0; j < static_cast<int>(input.model.size()); ++j) {
+      if (input.model[j].size() < 2 || PolylineLength(input.model[j]) < params.min_seed_length_m) continue;
+      const bool in_first_pass = std::any_of(chosen.begin(), chosen.end(), [&](const Seed& s) {
+        return s.scan == i && s.model == j;
+      });
+      if (!in_first_pass) others.push_back(seed_of(i, j));
+    }
+  }
+  auto by_reliability = [](const Seed& a, const Seed& b) { return a.reliability > b.reliability; };
+  std::stable_sort(chosen.begin(), chosen.end(), by_reliability);
+  std::stable_sort(others.begin(), others.end(), by_reliability);
+  chosen.insert(chosen.end(), others.begin(), others.end());
+  if (static_cast<int>(chosen.size()) > params.max_seed_pairs) chosen.resize(params.max_seed_pairs);
+  return chosen;
 }
 
-// Candidate estimates of §4.3: the alignments induced by the most reliable pairs of the first
-// pass, then the caller's hints.
+// Candidate estimates of §4.3: the alignments induced by the most reliable pairs, pre-scored by
+// their fit so that only the best num_seeds go through the second pass, then the caller's hints.
 struct Candidate {
   Pose2 T_model_scan;
   double reliability = std::numeric_limits<double>::quiet_NaN();
+  double fit = 0.0;
 };
 
+bool SameEstimate(const Pose2& a, const Pose2& b) {
+  return (a.Translation() - b.Translation()).norm() < 0.05 &&
+         std::abs(NormalizeAngle(a.theta - b.theta)) < 0.02;
+}
+
 std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
-                                      const ShapeMatcherParams& params, PairEvaluator& evaluator) {
+                                      const ShapeMatcherParams& params, PairEvaluator& evaluator,
+                                      const FitScorer& scorer) {
   const CorrespondenceSolution first =
       SolvePass(input, params, evaluator, std::nullopt, params.first_pass_group_size);
   std::vector<Candidate> candidates;
-  for (const Seed& seed : MostReliablePairs(first, evaluator, params.num_seeds)) {
-    const GroupMatch& m = seed.match;
+  for (const Seed& seed : MostReliablePairs(input, first, params, evaluator)) {
     const AlignmentResult induced =
-        InducedAlignment(evaluator.ScanGroup(m.scan_first, m.scan_count),
-                         evaluator.ModelGroup(m.model_first, m.model_count), params.alignment);
-    candidates.push_back({induced.T_map_scan, seed.reliability});
+        InducedAlignment(input.scan[seed.scan], input.model[seed.model], params.alignment);
+    const bool duplicate = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) {
+      return SameEstimate(c.T_model_scan, induced.T_map_scan);
+    });
+    if (!duplicate) {
+      candidates.push_back({induced.T_map_scan, seed.reliability, scorer.InlierRatio(induced.T_map_scan)});
+    }
   }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
+  if (static_cast<int>(candidates.size()) > params.num_seeds) candidates.resize(params.num_seeds);
   for (const Pose2& hint : input.hint_estimates) candidates.push_back({hint});
   return candidates;
 }
@@ -267,13 +339,13 @@ std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
 // §4.3: two passes, the second against each candidate estimate; the best final fit wins (most
 // inliers, then lowest eq. (4) cost).
 ShapeMatchResult MatchWithoutGuess(const ShapeMatchInput& input, const ShapeMatcherParams& params,
-                                   PairEvaluator& evaluator) {
+                                   PairEvaluator& evaluator, const FitScorer& scorer) {
   ShapeMatchResult best;
   bool have_best = false;
-  for (const Candidate& candidate : SeedCandidates(input, params, evaluator)) {
+  for (const Candidate& candidate : SeedCandidates(input, params, evaluator, scorer)) {
     CorrespondenceSolution second =
         SolvePass(input, params, evaluator, candidate.T_model_scan, params.max_group_size);
-    ShapeMatchResult result = Finish(input, params, std::move(second), candidate.T_model_scan);
+    ShapeMatchResult result = Finish(input, params, scorer, std::move(second), candidate.T_model_scan);
     result.reliability = candidate.reliability;
     const bool better = !have_best || result.inlier_ratio > best.inlier_ratio + 1e-12 ||
                         (std::abs(result.inlier_ratio - best.inlier_ratio) <= 1e-12 &&
@@ -283,7 +355,7 @@ ShapeMatchResult MatchWithoutGuess(const ShapeMatchInput& input, const ShapeMatc
       have_best = true;
     }
   }
-  if (!have_best) best.inlier_ratio = InlierRatio(input, best.T_model_scan, params.inlier_distance_m);
+  if (!have_best) best.inlier_ratio = scorer.InlierRatio(best.T_model_scan);
   return best;
 }
 
@@ -353,6 +425,12 @@ void ShapeMatcherParams::Validate() const {
     throw std::invalid_argument("ShapeMatcherParams: group sizes must be >= 1");
   }
   if (num_seeds < 1) throw std::invalid_argument("ShapeMatcherParams::num_seeds must be >= 1");
+  if (max_seed_pairs < 1) {
+    throw std::invalid_argument("ShapeMatcherParams::max_seed_pairs must be >= 1");
+  }
+  if (!(min_seed_length_m >= 0.0)) {
+    throw std::invalid_argument("ShapeMatcherParams::min_seed_length_m must be >= 0");
+  }
 }
 
 AlignmentResult InducedAlignment(const Polyline& perceived, const Polyline& model,
@@ -395,10 +473,12 @@ ShapeMatchResult MatchShapes(const ShapeMatchInput& input,
     throw std::invalid_argument("MatchShapes: scan_fine must be empty or match scan in size");
   }
   PairEvaluator evaluator(input, params);
-  if (!T_model_scan_guess) return MatchWithoutGuess(input, params, evaluator);
+  const FitScorer scorer(input, params);
+  if (!T_model_scan_guess) return MatchWithoutGuess(input, params, evaluator, scorer);
   CorrespondenceSolution solution =
       SolvePass(input, params, evaluator, *T_model_scan_guess, params.max_group_size);
-  ShapeMatchResult result = Finish(input, params, std::move(solution), *T_model_scan_guess);
+  ShapeMatchResult result =
+      Finish(input, params, scorer, std::move(solution), *T_model_scan_guess);
   result.used_guess = true;
   return result;
 }
