@@ -15,6 +15,9 @@ struct MapUpdateParams {
   /// DCE threshold applied to merged and added polylines so the map stays compact (metres, the
   /// relevance K of eq. 1).
   double dce_threshold_m = 0.03;
+  /// ... without moving a polyline farther than this from the points it was made of (metres;
+  /// see SimplifyDceBounded).
+  double max_deviation_m = 0.03;
   /// Spacing of the points at which the bodies are averaged, metres.
   double merge_sample_spacing_m = 0.05;
   /// Rays that meet a body at less than this angle (radians) are ill-conditioned: there the
@@ -31,6 +34,9 @@ struct MapUpdateParams {
   /// ... and the overlap is at least this long (metres) or covers this fraction of the shorter.
   double merge_min_overlap_m = 0.30;
   double merge_min_overlap_fraction = 0.5;
+  /// When the scan's pose is not confirmed by a match, only perceived polylines that lie mostly
+  /// farther than this from the map are added (new territory); nothing is merged (metres).
+  double untrusted_clearance_m = 0.5;
   /// Perceived polylines shorter than this are not added to the map (metres).
   double min_new_length_m = 0.10;
   /// A map polyline is contradicted by a scan when most of its visible samples lie in front of
@@ -64,15 +70,18 @@ struct MapUpdateStats {
   int added = 0;    ///< new map polylines
   int joined = 0;   ///< map polylines absorbed into another by a merge
   int dropped = 0;  ///< map polylines removed by the contradiction rule
+  int unsound = 0;  ///< merges rejected because the result strayed from its inputs
 };
 
 /// One scan's map update at the final pose: every perceived polyline (map frame) merges into
 /// the map polylines it overlaps (by the misfit test above, which after alignment confirms the
 /// shape matcher's correspondences and catches overlaps that grouping differences left
-/// unmatched); the rest are added. `ranges_m` / `angles_rad` (sensor frame) and the visible
-/// shape used for matching feed the contradiction rule.
+/// unmatched); the rest are added. The scan and the visible shape used for matching (sensor
+/// frame at the final pose) feed the contradiction rule. With `pose_trusted` false (no match
+/// confirmed the pose) the map only grows into new territory (see untrusted_clearance_m): a
+/// misplaced scan must not blur or contradict what is there.
 MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceived_map,
                          const Pose2& T_map_sensor, const std::vector<VisiblePolyline>& visible,
-                         const LaserScan& scan, const MapUpdateParams& params);
+                         const LaserScan& scan, bool pose_trusted, const MapUpdateParams& params);
 
 }  // namespace shape_slam

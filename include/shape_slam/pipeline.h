@@ -61,8 +61,19 @@ struct ShapeSlamParams {
   MapUpdateParams map_update;        ///< §5.2
   KeyframeParams keyframe;
   OdometryNoiseParams odometry_noise;
+  /// Also match each scan against the last keyframe scan's polylines (besides the visible map):
+  /// a fresh, undistorted view of the same place that keeps tracking robust where the map is
+  /// still thin or imperfect. Not in the paper, which matches against the map alone.
+  bool use_last_keyframe = true;
   /// Use the log's odometry to predict poses; when false (or the log has none) §4.3 applies.
   bool use_odometry = true;
+  /// With odometry, an estimate farther than this many standard deviations (Mahalanobis, of
+  /// the odometry noise model) from the prediction is rejected as a false match.
+  double max_prior_mahalanobis = 4.0;
+  /// A scan whose pose no match confirmed still updates the map when less than this fraction
+  /// of it lies within new_territory_distance_m (metres) of the visible map: new territory.
+  double max_untrusted_coverage = 0.3;
+  double new_territory_distance_m = 1.0;
   /// A match is trusted when at least this fraction of the scan lies on the map afterwards.
   double min_inlier_ratio = 0.30;
   /// Cell size of the map's spatial index, metres.
@@ -114,6 +125,11 @@ class ShapeSlam {
   std::optional<Pose2> previous_T_map_robot_;  // the one before last, for constant velocity
   std::optional<Pose2> last_T_odom_robot_;
   std::optional<Pose2> last_keyframe_T_map_robot_;
+  struct KeyframeShapes {
+    Pose2 T_map_sensor;
+    std::vector<Polyline> coarse, fine;  // sensor frame
+  };
+  std::optional<KeyframeShapes> last_keyframe_;
 };
 
 }  // namespace shape_slam

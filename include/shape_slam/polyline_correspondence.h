@@ -42,6 +42,10 @@ struct CorrespondenceProblem {
   /// When true the model order is cyclic (its start is unknown, e.g. a 360 deg view or no pose
   /// estimate): every rotation of the model sequence is tried and groups may wrap around.
   bool model_cyclic = false;
+  /// With a cyclic model: the rotations (index of the model polyline the order starts at) to
+  /// try; empty tries all of them. A pose estimate tells where the order starts, so a caller
+  /// with one can restrict the search to a few rotations.
+  std::vector<int> model_rotations;
   /// Largest group on either side (1 disables groupings).
   int max_group_size = 3;
 };

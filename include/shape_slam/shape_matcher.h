@@ -39,6 +39,9 @@ struct ShapeMatcherParams {
   double deviation_sigma_rad = 0.25;  ///< radians
   /// Gates (with an estimate): pairs whose misfit or angle exceed these are not considered.
   double max_misfit_m = 1.0;     ///< metres
+  /// The misfit gate of §4.3's second pass, whose estimate comes from a seed already aligned
+  /// to the model (metres).
+  double seeded_max_misfit_m = 0.3;
   double max_angle_rad = 0.6;    ///< radians
   /// A pair must overlap over at least this fraction of the shorter of the two groups
   /// (projections that fall beyond a polyline's ends do not count as overlap).
@@ -49,6 +52,13 @@ struct ShapeMatcherParams {
   /// pairs are scored by their fit, and the best `num_seeds` go through the second pass.
   int max_seed_pairs = 12;
   int num_seeds = 3;
+  /// Each seed's induced alignment is first improved by this many point-to-point ICP steps
+  /// against the whole model, associating samples within seed_capture_distance_m (metres).
+  int seed_icp_iterations = 6;
+  double seed_capture_distance_m = 0.5;
+  /// Without an estimate, candidates are ranked by inlier ratio - rotation_prior_weight *
+  /// (theta / pi)^2: between equally good fits (symmetric places) the smaller turn wins.
+  double rotation_prior_weight = 0.1;
   /// Polylines shorter than this do not seed (metres).
   double min_seed_length_m = 0.3;
   /// §4.3 first pass: largest group (1 = only 1-to-1, which is all the seed needs).

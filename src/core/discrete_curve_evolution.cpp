@@ -4,6 +4,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "shape_slam/geometry.h"
+
 namespace shape_slam {
 namespace {
 
@@ -25,8 +27,9 @@ double Relevance(const Point2& u, const Point2& v, const Point2& w) {
   return std::abs((v - u).norm() + (w - v).norm() - (w - u).norm());  // Eq. (1)
 }
 
-CurveEvolution::CurveEvolution(const Polyline& polyline)
+CurveEvolution::CurveEvolution(const Polyline& polyline, double max_deviation_m)
     : points_(polyline),
+      max_deviation_m_(max_deviation_m),
       prev_(polyline.size()),
       next_(polyline.size()),
       version_(polyline.size(), 0),
@@ -40,10 +43,21 @@ CurveEvolution::CurveEvolution(const Polyline& polyline)
   for (int i = 1; i + 1 < n; ++i) Push(i);
 }
 
-void CurveEvolution::Push(int index) {
-  heap_.push({Relevance(points_[prev_[index]], points_[index], points_[next_[index]]), index,
-              version_[index]});
+double CurveEvolution::Relevance(int index) const {
+  const Point2& u = points_[prev_[index]];
+  const Point2& w = points_[next_[index]];
+  if (std::isfinite(max_deviation_m_)) {
+    const double bound2 = max_deviation_m_ * max_deviation_m_;
+    for (int k = prev_[index] + 1; k < next_[index]; ++k) {
+      if (SquaredDistanceToSegment(points_[k], u, w) > bound2) {
+        return std::numeric_limits<double>::infinity();
+      }
+    }
+  }
+  return shape_slam::Relevance(u, points_[index], w);
 }
+
+void CurveEvolution::Push(int index) { heap_.push({Relevance(index), index, version_[index]}); }
 
 // Pops heap entries of removed vertices or outdated relevances, so that top() is current.
 void CurveEvolution::DropStale() {
@@ -99,6 +113,16 @@ std::vector<int> CurveEvolution::CurrentIndices() const {
 Polyline SimplifyDce(const Polyline& polyline, double threshold_m) {
   CheckThreshold(threshold_m);
   CurveEvolution evolution(polyline);
+  while (evolution.CanRemove() && evolution.NextRelevance() <= threshold_m) evolution.RemoveNext();
+  return evolution.Current();
+}
+
+Polyline SimplifyDceBounded(const Polyline& polyline, double threshold_m, double max_deviation_m) {
+  CheckThreshold(threshold_m);
+  if (!(max_deviation_m >= 0.0)) {
+    throw std::invalid_argument("SimplifyDceBounded: max_deviation_m must be >= 0");
+  }
+  CurveEvolution evolution(polyline, max_deviation_m);
   while (evolution.CanRemove() && evolution.NextRelevance() <= threshold_m) evolution.RemoveNext();
   return evolution.Current();
 }

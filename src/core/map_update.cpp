@@ -132,8 +132,8 @@ WeightedPolyline AverageBodies(const WeightedPolyline& model_body,
 
 // DCE on a weighted polyline; the kept vertices keep their weights (DCE keeps original
 // vertices, so they are found again in order).
-WeightedPolyline Simplify(const WeightedPolyline& w, double threshold_m) {
-  const Polyline kept = SimplifyDce(w.points, threshold_m);
+WeightedPolyline Simplify(const WeightedPolyline& w, double threshold_m, double max_deviation_m) {
+  const Polyline kept = SimplifyDceBounded(w.points, threshold_m, max_deviation_m);
   WeightedPolyline out;
   std::size_t j = 0;
   for (const Point2& p : kept) {
@@ -209,16 +209,70 @@ std::vector<PolylineId> CorrespondingMapPolylines(const PolylineMap& map, const 
   return ids;
 }
 
+// Largest distance from points sampled along `a` (every 5 cm) to the nearer of `b` and `c`.
+double FarthestFrom(const Polyline& a, const Polyline& b, const Polyline& c) {
+  double worst = 0.0;
+  for (std::size_t i = 0; i + 1 < a.size(); ++i) {
+    const Point2 d = a[i + 1] - a[i];
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / 0.05)));
+    for (int k = 0; k <= n; ++k) {
+      const Point2 p = a[i] + d * (static_cast<double>(k) / n);
+      double d2 = ProjectOntoPolyline(p, b).squared_distance;
+      if (!c.empty()) d2 = std::min(d2, ProjectOntoPolyline(p, c).squared_distance);
+      worst = std::max(worst, d2);
+    }
+  }
+  return std::sqrt(worst);
+}
+
+// A merge is sound when the result stays close to its inputs along its whole length and still
+// covers the model: anything else (a polyline doubling back, a segment cutting a corner) is a
+// merge gone wrong, and the map keeps the inputs apart instead.
+bool SoundMerge(const Polyline& merged, const Polyline& model, const Polyline& perceived,
+                const MapUpdateParams& params) {
+  const double tolerance = 2.0 * params.merge_max_misfit_m;
+  return merged.size() >= 2 && FarthestFrom(merged, model, perceived) <= tolerance &&
+         FarthestFrom(model, merged, {}) <= tolerance;
+}
+
+// Whether most of a perceived polyline lies within `clearance_m` of the map.
+bool NearMap(const PolylineMap& map, const Polyline& perceived, double clearance_m) {
+  Point2 min = perceived.front(), max = perceived.front();
+  for (const Point2& p : perceived) min = min.cwiseMin(p), max = max.cwiseMax(p);
+  const Point2 margin = Point2::Constant(clearance_m);
+  const std::vector<PolylineId> ids = map.IdsNear(min - margin, max + margin);
+  if (ids.empty()) return false;
+  int near = 0, total = 0;
+  for (std::size_t i = 0; i + 1 < perceived.size(); ++i) {
+    const Point2 d = perceived[i + 1] - perceived[i];
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / 0.1)));
+    for (int k = 0; k < n; ++k) {
+      const Point2 p = perceived[i] + d * ((k + 0.5) / n);
+      ++total;
+      for (const PolylineId id : ids) {
+        if (ProjectOntoPolyline(p, map.Get(id).points).squared_distance <= clearance_m * clearance_m) {
+          ++near;
+          break;
+        }
+      }
+    }
+  }
+  return 2 * near > total;
+}
+
 // Merges a perceived polyline into the corresponding map polylines: into the first, which then
 // absorbs the others (a perceived polyline bridging two map polylines joins them).
-void MergeIntoMap(PolylineMap& map, const Polyline& perceived, const std::vector<PolylineId>& ids,
+bool MergeIntoMap(PolylineMap& map, const Polyline& perceived, const std::vector<PolylineId>& ids,
                   const Point2& viewpoint, const MapUpdateParams& params, MapUpdateStats& stats) {
   MapPolyline target = map.Get(ids.front());
   WeightedPolyline merged = MergePolylines({target.points, target.support}, Unweighted(perceived),
                                            viewpoint, params);
+  if (!SoundMerge(merged.points, target.points, perceived, params)) return false;
   for (std::size_t k = 1; k < ids.size(); ++k) {
     const MapPolyline& other = map.Get(ids[k]);
-    merged = MergePolylines(merged, {other.points, other.support}, viewpoint, params);
+    WeightedPolyline joined = MergePolylines(merged, {other.points, other.support}, viewpoint, params);
+    if (!SoundMerge(joined.points, merged.points, other.points, params)) continue;
+    merged = std::move(joined);
     target.observations = std::max(target.observations, other.observations);
     map.Remove(ids[k]);
     ++stats.joined;
@@ -229,6 +283,7 @@ void MergeIntoMap(PolylineMap& map, const Polyline& perceived, const std::vector
   target.contradictions = 0;
   map.Replace(ids.front(), std::move(target));
   ++stats.merged;
+  return true;
 }
 
 // Index of the beam whose direction is nearest to `bearing`, with beams sorted by angle.
@@ -310,11 +365,13 @@ void MapUpdateParams::Validate() const {
     }
   };
   positive(dce_threshold_m, "dce_threshold_m");
+  positive(max_deviation_m, "max_deviation_m");
   positive(merge_sample_spacing_m, "merge_sample_spacing_m");
   positive(max_support, "max_support");
   positive(merge_max_misfit_m, "merge_max_misfit_m");
   positive(merge_max_angle_rad, "merge_max_angle_rad");
   positive(contradiction_margin_m, "contradiction_margin_m");
+  positive(untrusted_clearance_m, "untrusted_clearance_m");
   if (!(min_incidence_rad >= 0.0 && min_incidence_rad < M_PI / 2)) {
     throw std::invalid_argument("MapUpdateParams::min_incidence_rad must be in [0, pi/2)");
   }
@@ -333,7 +390,7 @@ void MapUpdateParams::Validate() const {
 WeightedPolyline MergePolylines(const WeightedPolyline& model, const WeightedPolyline& perceived,
                                 const Point2& viewpoint, const MapUpdateParams& params) {
   if (perceived.points.size() < 2) return model;
-  if (model.points.size() < 2) return Simplify(perceived, params.dce_threshold_m);
+  if (model.points.size() < 2) return Simplify(perceived, params.dce_threshold_m, params.max_deviation_m);
   // Orient the perceived polyline like the model.
   const WeightedPolyline a =
       ArcPositionOf(perceived.points.front(), model.points) >
@@ -357,37 +414,42 @@ WeightedPolyline MergePolylines(const WeightedPolyline& model, const WeightedPol
       SubPolyline(model, head_from_a ? 0.0 : s_a0, tail_from_a ? length_m : s_a1);
   const WeightedPolyline a_body =
       SubPolyline(a, head_from_a ? t_m0 : 0.0, tail_from_a ? t_m1 : length_a);
+  // A head or tail of (almost) zero length is just the body's end point: averaged with the body.
+  auto has_length = [](const WeightedPolyline& part) { return PolylineLength(part.points) > 1e-6; };
   WeightedPolyline merged;
-  Append(merged, head);
+  if (has_length(head)) Append(merged, head);
   if (model_body.points.size() >= 2 && a_body.points.size() >= 2) {
     Append(merged, AverageBodies(model_body, a_body, viewpoint, params));
   } else {
     Append(merged, model_body);
   }
-  Append(merged, tail);
-  return Simplify(merged, params.dce_threshold_m);
+  if (has_length(tail)) Append(merged, tail);
+  return Simplify(merged, params.dce_threshold_m, params.max_deviation_m);
 }
 
 MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceived_map,
                          const Pose2& T_map_sensor, const std::vector<VisiblePolyline>& visible,
-                         const LaserScan& scan, const MapUpdateParams& params) {
+                         const LaserScan& scan, bool pose_trusted, const MapUpdateParams& params) {
   params.Validate();
   MapUpdateStats stats;
   const Point2 viewpoint = T_map_sensor.Translation();
   std::vector<PolylineId> touched;
   for (const Polyline& perceived : perceived_map) {
     if (perceived.size() < 2 || PolylineLength(perceived) < params.min_new_length_m) continue;
-    const std::vector<PolylineId> ids = CorrespondingMapPolylines(map, perceived, params);
-    if (ids.empty()) {
-      const WeightedPolyline simplified = Simplify(Unweighted(perceived), params.dce_threshold_m);
-      touched.push_back(map.Add({simplified.points, simplified.weights, 1, 0}));
-      ++stats.added;
-    } else {
-      MergeIntoMap(map, perceived, ids, viewpoint, params, stats);
+    if (!pose_trusted && NearMap(map, perceived, params.untrusted_clearance_m)) continue;
+    const std::vector<PolylineId> ids =
+        pose_trusted ? CorrespondingMapPolylines(map, perceived, params) : std::vector<PolylineId>{};
+    if (!ids.empty() && MergeIntoMap(map, perceived, ids, viewpoint, params, stats)) {
       touched.push_back(ids.front());
+      continue;
     }
+    if (!ids.empty()) ++stats.unsound;
+    const WeightedPolyline simplified = Simplify(Unweighted(perceived), params.dce_threshold_m, params.max_deviation_m);
+    touched.push_back(map.Add({simplified.points, simplified.weights, 1, 0}));
+    ++stats.added;
   }
-  CountContradictions(map, visible, scan, touched, params, stats);
+  // An unconfirmed pose could make right polylines look contradicted: count only confirmed views.
+  if (pose_trusted) CountContradictions(map, visible, scan, touched, params, stats);
   return stats;
 }
 

@@ -1,11 +1,14 @@
 #include "shape_slam/pipeline.h"
 
+#include <Eigen/Cholesky>
+
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "shape_slam/alignment.h"
+#include "shape_slam/internal/model_segments.h"
 
 namespace shape_slam {
 namespace {
@@ -85,6 +88,7 @@ std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double s
 // The estimated correction T_pred_sensor (sensor frame at the prediction -> at the estimate).
 struct Localization {
   Pose2 correction;
+  double coverage = 0.0;  // fraction of the scan within new_territory_distance_m of the map
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   bool trusted = false;
   int matched_pairs = 0;
@@ -123,6 +127,11 @@ void ShapeSlamParams::Validate() const {
   }
   Positive(index_cell_size_m, "ShapeSlamParams::index_cell_size_m");
   Positive(coarse_gate_m, "ShapeSlamParams::coarse_gate_m");
+  Positive(new_territory_distance_m, "ShapeSlamParams::new_territory_distance_m");
+  if (!(max_untrusted_coverage >= 0.0 && max_untrusted_coverage <= 1.0)) {
+    throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
+  }
+  Positive(max_prior_mahalanobis, "ShapeSlamParams::max_prior_mahalanobis");
 }
 
 ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
@@ -154,6 +163,21 @@ bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
 
 namespace {
 
+// Fraction of the samples within the grid's radius of the model at an estimate.
+double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGrid& grid,
+                   const Pose2& T_model_scan) {
+  int inliers = 0;
+  for (const Point2& p : samples) inliers += grid.Nearest(T_model_scan * p).segment >= 0 ? 1 : 0;
+  return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
+}
+
+// Whether an estimate lies within max_sigma standard deviations (Mahalanobis) of the prior.
+bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma) {
+  const Pose2 d = prior.T_map_scan.Inverse() * estimate;
+  const Eigen::Vector3d e(d.x, d.y, d.theta);
+  return e.dot(prior.covariance.ldlt().solve(e)) <= max_sigma * max_sigma;
+}
+
 // Refines an estimate against every visible map polyline: with a wide gate first (odometry-size
 // errors), then with the configured one.
 RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
@@ -168,50 +192,81 @@ RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
   return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
 }
 
-Localization Localize(const Shapes& shapes, const std::vector<VisiblePolyline>& visible,
-                      const std::optional<Pose2>& odometry_delta,
-                      const std::optional<Pose2>& velocity_hint_correction, bool model_cyclic,
-                      const ShapeSlamParams& params) {
+// What a scan is localized against, in the sensor frame of the prediction: the visible map shape
+// and the polylines of the most recent keyframe scan.
+struct LocalModel {
+  std::vector<Polyline> map;      // visible map shape, CCW ordered
+  bool map_cyclic = false;
+  std::vector<Polyline> recent_coarse;  // last keyframe's polylines (shape matching)
+  std::vector<Polyline> recent_fine;    // the same, finer (refinement)
+};
+
+// Shape matching (§4.2, §4.3) of the scan against one model; its alignment is a candidate.
+std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Polyline>& model,
+                                    bool model_cyclic, const std::optional<Pose2>& guess,
+                                    const std::optional<Pose2>& velocity_hint,
+                                    const ShapeSlamParams& params, int& matched_pairs) {
+  if (model.empty()) return std::nullopt;
   ShapeMatchInput input;
   input.scan = shapes.coarse;
   input.scan_fine = shapes.fine;
-  input.model_cyclic = model_cyclic;
-  for (const VisiblePolyline& v : visible) input.model.push_back(v.points_sensor);
-  std::optional<Pose2> guess;
-  if (odometry_delta) {
-    guess = Pose2();  // the model is already seen from the odometry prediction
-  } else {
+  input.model = model;
+  input.model_cyclic = model_cyclic || !guess;
+  if (!guess) {
     input.hint_estimates.push_back(Pose2());  // the robot did not move
-    if (velocity_hint_correction) input.hint_estimates.push_back(*velocity_hint_correction);
+    if (velocity_hint) input.hint_estimates.push_back(*velocity_hint);
   }
   const ShapeMatchResult match = MatchShapes(input, guess, params.matcher);
+  matched_pairs = std::max(matched_pairs, static_cast<int>(match.matches.size()));
+  if (match.matches.empty()) return std::nullopt;
+  return match.T_model_scan;
+}
+
+// Candidates from shape matching against the map and against the last keyframe, and the
+// prediction itself, are each refined against both; the one explaining most of the scan wins.
+Localization Localize(const Shapes& shapes, const LocalModel& model,
+                      const std::optional<Pose2>& odometry_delta,
+                      const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params) {
   Localization loc;
-  loc.matched_pairs = static_cast<int>(match.matches.size());
+  std::optional<Pose2> guess;
   std::optional<PosePrior> prior;
   if (odometry_delta) {
+    guess = Pose2();  // the model is already seen from the odometry prediction
     prior = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
   }
-  // Candidates: the shape matcher's alignment, and the prediction itself when the shape match
-  // is weak; each is refined against the whole visible map and the best fit wins.
   std::vector<Pose2> candidates;
-  if (!match.matches.empty()) candidates.push_back(match.T_model_scan);
-  if (match.inlier_ratio < 0.9 && guess) candidates.push_back(*guess);
+  for (const auto& [shape_model, cyclic] :
+       {std::pair{&model.map, model.map_cyclic}, std::pair{&model.recent_coarse, false}}) {
+    if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, params,
+                                loc.matched_pairs)) {
+      candidates.push_back(*c);
+    }
+  }
+  if (guess) candidates.push_back(*guess);
+  std::vector<Polyline> all = model.map;
+  all.insert(all.end(), model.recent_fine.begin(), model.recent_fine.end());
   const std::vector<Point2> samples =
       AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
-  if (samples.empty()) return loc;
+  if (samples.empty() || all.empty()) return loc;
+  const internal::SegmentGrid grid(internal::MakeModelSegments(all), params.matcher.inlier_distance_m);
   double best_ratio = -1.0;
   for (const Pose2& candidate : candidates) {
-    const RefinementResult refined = RefineAgainstMap(samples, input.model, candidate, prior, params);
-    const double ratio = static_cast<double>(refined.num_residuals) / samples.size();
+    const RefinementResult refined = RefineAgainstMap(samples, all, candidate, prior, params);
+    if (!refined.converged) continue;
+    if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
+    const double ratio = InlierRatio(samples, grid, refined.T_map_scan);
     if (ratio <= best_ratio) continue;
     best_ratio = ratio;
-    loc.correction = refined.converged ? refined.T_map_scan : candidate;
+    loc.correction = refined.T_map_scan;
     loc.covariance = refined.covariance;
     loc.rms_error_m = refined.rms_error_m;
     loc.inlier_ratio = ratio;
-    loc.trusted = refined.converged && ratio >= params.min_inlier_ratio;
+    loc.trusted = ratio >= params.min_inlier_ratio;
   }
   if (!loc.trusted) loc.correction = Pose2();
+  const internal::SegmentGrid near_grid(internal::MakeModelSegments(all),
+                                        params.new_territory_distance_m);
+  loc.coverage = InlierRatio(samples, near_grid, loc.correction);
   return loc;
 }
 
@@ -237,13 +292,20 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
                                      : std::min(2.0 * M_PI, FieldOfView(scan) +
                                                                 2.0 * params_.visibility_fov_margin_rad);
     visible = map_.Visible(T_map_sensor_pred, visibility);
+    LocalModel model;
+    for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
+    model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
+    if (last_keyframe_) {
+      const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() * last_keyframe_->T_map_sensor;
+      for (const Polyline& p : last_keyframe_->coarse) model.recent_coarse.push_back(Transform(T_pred_keyframe, p));
+      for (const Polyline& p : last_keyframe_->fine) model.recent_fine.push_back(Transform(T_pred_keyframe, p));
+    }
     std::optional<Pose2> velocity_hint;
     if (prediction.T_pred_robot_velocity) {
       velocity_hint = scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity *
                       scan.T_robot_sensor;
     }
-    const bool cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
-    loc = Localize(shapes, visible, prediction.odometry_delta, velocity_hint, cyclic, params_);
+    loc = Localize(shapes, model, prediction.odometry_delta, velocity_hint, params_);
   }
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
@@ -253,15 +315,21 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.inlier_ratio = loc.inlier_ratio;
   report.rms_error_m = loc.rms_error_m;
 
-  if (!shapes.fine.empty() && IsKeyframe(report.T_map_robot)) {
+  // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
+  // (new territory); elsewhere it would blur or duplicate what is there.
+  const bool may_update = loc.trusted || map_.Empty() ||
+                          loc.coverage < params_.max_untrusted_coverage;
+  if (!shapes.fine.empty() && may_update && IsKeyframe(report.T_map_robot)) {
     std::vector<Polyline> perceived_map;
     for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
     const Pose2 correction_inverse = loc.correction.Inverse();
     for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
     report.map_update =
-        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, params_.map_update);
+        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, loc.trusted || map_.Empty(),
+                  params_.map_update);
     report.keyframe = true;
     last_keyframe_T_map_robot_ = report.T_map_robot;
+    if (params_.use_last_keyframe) last_keyframe_ = KeyframeShapes{T_map_sensor, shapes.coarse, shapes.fine};
   }
   previous_T_map_robot_ = last_T_map_robot_;
   last_T_map_robot_ = report.T_map_robot;

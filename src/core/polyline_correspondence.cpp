@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <optional>
 #include <stdexcept>
 
 namespace shape_slam {
@@ -119,13 +120,21 @@ CorrespondenceSolution SolveCorrespondence(const CorrespondenceProblem& problem)
     return none;
   }
   CostCache cache(problem, a, b);
-  const int rotations = problem.model_cyclic ? b : 1;
-  CorrespondenceSolution best = SolveRotation(problem, cache, 0);
-  for (int r = 1; r < rotations; ++r) {
-    CorrespondenceSolution candidate = SolveRotation(problem, cache, r);
-    if (candidate.total_cost < best.total_cost) best = std::move(candidate);
+  std::vector<int> rotations = {0};
+  if (problem.model_cyclic) {
+    rotations = problem.model_rotations;
+    if (rotations.empty()) {
+      rotations.resize(b);
+      std::iota(rotations.begin(), rotations.end(), 0);
+    }
   }
-  return best;
+  std::optional<CorrespondenceSolution> best;
+  for (const int r : rotations) {
+    if (r < 0 || r >= b) throw std::invalid_argument("SolveCorrespondence: rotation out of range");
+    CorrespondenceSolution candidate = SolveRotation(problem, cache, r);
+    if (!best || candidate.total_cost < best->total_cost) best = std::move(candidate);
+  }
+  return *best;
 }
 
 }  // namespace shape_slam

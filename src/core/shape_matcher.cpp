@@ -119,14 +119,15 @@ class PairEvaluator {
   }
 
   // D of eq. (4) against an estimate, or nullopt when a gate rejects the pair.
-  std::optional<double> Deviation(int i, int gs, int j, int gm, const Pose2& T_model_scan) {
+  std::optional<double> Deviation(int i, int gs, int j, int gm, const Pose2& T_model_scan,
+                                  double max_misfit_m) {
     const Group& scan = ScanGroup(i, gs);
     const Group& model = ModelGroup(j, gm);
-    if (!BoxesMeet(scan, model, T_model_scan)) return std::nullopt;  // cheap rejection first
+    if (!BoxesMeet(scan, model, T_model_scan, max_misfit_m)) return std::nullopt;  // cheap first
     const Misfit m = MeasureMisfit(scan.samples, scan.length_m, model.points, T_model_scan);
     const double shorter = std::min(scan.length_m, model.length_m);
     if (m.overlap_m <= 0.0 || m.overlap_m < params_.min_overlap_fraction * shorter ||
-        m.rms_m > params_.max_misfit_m || m.angle_rms_rad > params_.max_angle_rad) {
+        m.rms_m > max_misfit_m || m.angle_rms_rad > params_.max_angle_rad) {
       return std::nullopt;
     }
     const double dt = m.rms_m / params_.deviation_sigma_m;
@@ -154,7 +155,7 @@ class PairEvaluator {
 
   // Whether the scan group, moved by the estimate, comes within max_misfit_m of the model
   // group's bounding box.
-  bool BoxesMeet(const Group& scan, const Group& model, const Pose2& T) const {
+  bool BoxesMeet(const Group& scan, const Group& model, const Pose2& T, double margin) const {
     Point2 lo = Point2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     for (const Point2 corner : {scan.min, scan.max, Point2(scan.min.x(), scan.max.y()),
                                 Point2(scan.max.x(), scan.min.y())}) {
@@ -162,7 +163,6 @@ class PairEvaluator {
       lo = lo.cwiseMin(q);
       hi = hi.cwiseMax(q);
     }
-    const double margin = params_.max_misfit_m;
     return lo.x() <= model.max.x() + margin && hi.x() >= model.min.x() - margin &&
            lo.y() <= model.max.y() + margin && hi.y() >= model.min.y() - margin;
   }
@@ -181,15 +181,37 @@ std::vector<double> SkipPenalties(const std::vector<Polyline>& polylines, double
   return penalties;
 }
 
+// With an estimate, the cyclic model's order starts near the model polyline whose bearing, seen
+// from the scan, is the first at or after the scan's own first polyline: that rotation and its
+// neighbours are the only ones worth trying.
+std::vector<int> LikelyRotations(const ShapeMatchInput& input, const Pose2& T_model_scan) {
+  const int b = static_cast<int>(input.model.size());
+  if (b <= 3 || input.scan.empty() || input.scan.front().empty()) return {};
+  const Point2& s0 = input.scan.front().front();
+  const double start = std::atan2(s0.y(), s0.x()) - 0.5;  // a little before the scan's start
+  const Pose2 T_scan_model = T_model_scan.Inverse();
+  int best = 0;
+  double best_offset = 4.0 * M_PI;
+  for (int j = 0; j < b; ++j) {
+    if (input.model[j].empty()) continue;
+    const Point2 p = T_scan_model * input.model[j].front();
+    double offset = std::fmod(std::atan2(p.y(), p.x()) - start, 2.0 * M_PI);
+    if (offset < 0.0) offset += 2.0 * M_PI;
+    if (offset < best_offset) best_offset = offset, best = j;
+  }
+  return {(best + b - 1) % b, best, (best + 1) % b};
+}
+
 // One pass of eq. (4): with an estimate, cost = S* + D and gated pairs are forbidden; without,
 // cost = S* (the first pass of §4.3).
 CorrespondenceSolution SolvePass(const ShapeMatchInput& input, const ShapeMatcherParams& params,
                                  PairEvaluator& evaluator, const std::optional<Pose2>& estimate,
-                                 int max_group_size) {
+                                 int max_group_size, double max_misfit_m) {
   CorrespondenceProblem problem;
   problem.scan_skip_penalty = SkipPenalties(input.scan, params.skip_penalty_per_m);
   problem.model_skip_penalty = SkipPenalties(input.model, params.skip_penalty_per_m);
   problem.model_cyclic = input.model_cyclic;
+  if (estimate && input.model_cyclic) problem.model_rotations = LikelyRotations(input, *estimate);
   problem.max_group_size = max_group_size;
   problem.group_cost = [&](int i, int gs, int j, int gm) -> std::optional<double> {
     if (evaluator.ScanGroup(i, gs).points.size() < 2 || evaluator.ModelGroup(j, gm).points.size() < 2) {
@@ -197,7 +219,7 @@ CorrespondenceSolution SolvePass(const ShapeMatchInput& input, const ShapeMatche
     }
     double deviation = 0.0;
     if (estimate) {
-      const std::optional<double> d = evaluator.Deviation(i, gs, j, gm, *estimate);
+      const std::optional<double> d = evaluator.Deviation(i, gs, j, gm, *estimate, max_misfit_m);
       if (!d) return std::nullopt;  // gated before paying for S*
       deviation = *d;
     }
@@ -224,12 +246,33 @@ AlignmentResult AlignMatches(const ShapeMatchInput& input, const std::vector<Gro
   return AlignShapes(pairs, T_model_scan_init, params);
 }
 
+// Rigid transform minimising sum w |T a_i - b_i|^2 (2D Procrustes without scale).
+Pose2 FitRigid(const std::vector<Point2>& a, const std::vector<Point2>& b) {
+  Point2 ca = Point2::Zero(), cb = Point2::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
+  ca /= static_cast<double>(a.size());
+  cb /= static_cast<double>(b.size());
+  double sxx = 0.0, sxy = 0.0;  // sum of dot and cross products of the centred points
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    const Point2 p = a[i] - ca, q = b[i] - cb;
+    sxx += p.dot(q);
+    sxy += p.x() * q.y() - p.y() * q.x();
+  }
+  const double theta = std::atan2(sxy, sxx);
+  const Pose2 rotation(0.0, 0.0, theta);
+  const Point2 t = cb - rotation * ca;
+  return {t.x(), t.y(), theta};
+}
+
 // Scores an estimate by the fraction of the scan's samples that lie within the inlier distance
 // of any model polyline (a grid over the model keeps each query cheap).
 class FitScorer {
  public:
   FitScorer(const ShapeMatchInput& input, const ShapeMatcherParams& params)
-      : grid_(internal::MakeModelSegments(input.model), params.inlier_distance_m) {
+      : grid_(internal::MakeModelSegments(input.model), params.inlier_distance_m),
+        capture_grid_(internal::MakeModelSegments(input.model),
+                      std::max(params.seed_capture_distance_m, params.inlier_distance_m)),
+        capture_m_(std::max(params.seed_capture_distance_m, params.inlier_distance_m)) {
     for (const Polyline& polyline : AlignmentPolylines(input)) {
       for (const DirectedSample& s : SampleWithDirections(polyline, kSpacing)) {
         samples_.push_back(s.point);
@@ -244,9 +287,31 @@ class FitScorer {
     return static_cast<double>(inliers) / samples_.size();
   }
 
+  // A few point-to-point ICP steps against the whole model with a shrinking gate: turns a
+  // roughly right seed into a right one before seeds are compared by their fit.
+  Pose2 QuickAlign(const Pose2& T_model_scan, int iterations) const {
+    Pose2 T = T_model_scan;
+    std::vector<Point2> from, to;
+    for (int k = 0; k < iterations; ++k) {
+      const double gate = capture_m_ * (1.0 - 0.6 * k / std::max(1, iterations - 1));
+      from.clear();
+      to.clear();
+      for (const Point2& p : samples_) {
+        const internal::SegmentMatch m = capture_grid_.Nearest(T * p);
+        if (m.segment < 0 || m.beyond_end || m.squared_distance > gate * gate) continue;
+        from.push_back(p);
+        to.push_back(m.point);
+      }
+      if (from.size() < 3) break;
+      T = FitRigid(from, to);
+    }
+    return T;
+  }
+
  private:
-  static constexpr double kSpacing = 0.1;  // metres
-  internal::SegmentGrid grid_;
+  static constexpr double kSpacing = 0.2;  // metres
+  internal::SegmentGrid grid_, capture_grid_;
+  double capture_m_;
   std::vector<Point2> samples_;
 };
 
@@ -300,6 +365,9 @@ std::vector<Seed> MostReliablePairs(const ShapeMatchInput& input,
   return chosen;
 }
 
+// A seed's induced alignment only needs to be roughly right: QuickAlign finishes it.
+constexpr int kSeedAlignmentIterations = 10;
+
 // Candidate estimates of §4.3: the alignments induced by the most reliable pairs, pre-scored by
 // their fit so that only the best num_seeds go through the second pass, then the caller's hints.
 struct Candidate {
@@ -317,17 +385,19 @@ std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
                                       const ShapeMatcherParams& params, PairEvaluator& evaluator,
                                       const FitScorer& scorer) {
   const CorrespondenceSolution first =
-      SolvePass(input, params, evaluator, std::nullopt, params.first_pass_group_size);
+      SolvePass(input, params, evaluator, std::nullopt, params.first_pass_group_size, 0.0);
   std::vector<Candidate> candidates;
   for (const Seed& seed : MostReliablePairs(input, first, params, evaluator)) {
+    AlignmentParams quick = params.alignment;
+    quick.max_iterations = std::min(quick.max_iterations, kSeedAlignmentIterations);
     const AlignmentResult induced =
-        InducedAlignment(input.scan[seed.scan], input.model[seed.model], params.alignment);
+        InducedAlignment(input.scan[seed.scan], input.model[seed.model], quick);
     const bool duplicate = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) {
       return SameEstimate(c.T_model_scan, induced.T_map_scan);
     });
-    if (!duplicate) {
-      candidates.push_back({induced.T_map_scan, seed.reliability, scorer.InlierRatio(induced.T_map_scan)});
-    }
+    if (duplicate) continue;
+    const Pose2 aligned = scorer.QuickAlign(induced.T_map_scan, params.seed_icp_iterations);
+    candidates.push_back({aligned, seed.reliability, scorer.InlierRatio(aligned)});
   }
   std::stable_sort(candidates.begin(), candidates.end(),
                    [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
@@ -336,45 +406,38 @@ std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
   return candidates;
 }
 
-// §4.3: two passes, the second against each candidate estimate; the best final fit wins (most
-// inliers, then lowest eq. (4) cost).
+// How a candidate's final fit ranks: its inlier ratio, less a mild penalty on the rotation it
+// implies. Symmetric places (a corridor turned by 180 deg fits itself) fit equally well either
+// way; between consecutive scans the smaller turn is the likelier one.
+double SelectionScore(const ShapeMatchResult& result, const ShapeMatcherParams& params) {
+  const double turn = result.T_model_scan.theta / M_PI;
+  return result.inlier_ratio - params.rotation_prior_weight * turn * turn;
+}
+
+// §4.3: two passes, the second against each candidate estimate; the best final fit wins (see
+// SelectionScore, then lowest eq. (4) cost).
 ShapeMatchResult MatchWithoutGuess(const ShapeMatchInput& input, const ShapeMatcherParams& params,
                                    PairEvaluator& evaluator, const FitScorer& scorer) {
   ShapeMatchResult best;
   bool have_best = false;
+  double best_score = 0.0;
   for (const Candidate& candidate : SeedCandidates(input, params, evaluator, scorer)) {
     CorrespondenceSolution second =
-        SolvePass(input, params, evaluator, candidate.T_model_scan, params.max_group_size);
+        SolvePass(input, params, evaluator, candidate.T_model_scan, params.max_group_size,
+                  params.seeded_max_misfit_m);
     ShapeMatchResult result = Finish(input, params, scorer, std::move(second), candidate.T_model_scan);
     result.reliability = candidate.reliability;
-    const bool better = !have_best || result.inlier_ratio > best.inlier_ratio + 1e-12 ||
-                        (std::abs(result.inlier_ratio - best.inlier_ratio) <= 1e-12 &&
-                         result.total_cost < best.total_cost);
+    const double score = SelectionScore(result, params);
+    const bool better = !have_best || score > best_score + 1e-12 ||
+                        (std::abs(score - best_score) <= 1e-12 && result.total_cost < best.total_cost);
     if (better) {
       best = std::move(result);
+      best_score = score;
       have_best = true;
     }
   }
   if (!have_best) best.inlier_ratio = scorer.InlierRatio(best.T_model_scan);
   return best;
-}
-
-// Rigid transform minimising sum w |T a_i - b_i|^2 (2D Procrustes without scale).
-Pose2 FitRigid(const std::vector<Point2>& a, const std::vector<Point2>& b) {
-  Point2 ca = Point2::Zero(), cb = Point2::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
-  ca /= static_cast<double>(a.size());
-  cb /= static_cast<double>(b.size());
-  double sxx = 0.0, sxy = 0.0;  // sum of dot and cross products of the centred points
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const Point2 p = a[i] - ca, q = b[i] - cb;
-    sxx += p.dot(q);
-    sxy += p.x() * q.y() - p.y() * q.x();
-  }
-  const double theta = std::atan2(sxy, sxx);
-  const Pose2 rotation(0.0, 0.0, theta);
-  const Point2 t = cb - rotation * ca;
-  return {t.x(), t.y(), theta};
 }
 
 // Points at equal fractions of the arc length of a polyline (both ends included).
@@ -412,6 +475,7 @@ void ShapeMatcherParams::Validate() const {
   positive(deviation_sigma_m, "deviation_sigma_m");
   positive(deviation_sigma_rad, "deviation_sigma_rad");
   positive(max_misfit_m, "max_misfit_m");
+  positive(seeded_max_misfit_m, "seeded_max_misfit_m");
   positive(max_angle_rad, "max_angle_rad");
   positive(inlier_distance_m, "inlier_distance_m");
   positive(deviation_sample_spacing_m, "deviation_sample_spacing_m");
@@ -424,6 +488,13 @@ void ShapeMatcherParams::Validate() const {
   if (max_group_size < 1 || first_pass_group_size < 1) {
     throw std::invalid_argument("ShapeMatcherParams: group sizes must be >= 1");
   }
+  if (!(rotation_prior_weight >= 0.0) || !std::isfinite(rotation_prior_weight)) {
+    throw std::invalid_argument("ShapeMatcherParams::rotation_prior_weight must be >= 0");
+  }
+  if (seed_icp_iterations < 0) {
+    throw std::invalid_argument("ShapeMatcherParams::seed_icp_iterations must be >= 0");
+  }
+  positive(seed_capture_distance_m, "seed_capture_distance_m");
   if (num_seeds < 1) throw std::invalid_argument("ShapeMatcherParams::num_seeds must be >= 1");
   if (max_seed_pairs < 1) {
     throw std::invalid_argument("ShapeMatcherParams::max_seed_pairs must be >= 1");
@@ -476,7 +547,8 @@ ShapeMatchResult MatchShapes(const ShapeMatchInput& input,
   const FitScorer scorer(input, params);
   if (!T_model_scan_guess) return MatchWithoutGuess(input, params, evaluator, scorer);
   CorrespondenceSolution solution =
-      SolvePass(input, params, evaluator, *T_model_scan_guess, params.max_group_size);
+      SolvePass(input, params, evaluator, *T_model_scan_guess, params.max_group_size,
+                params.max_misfit_m);
   ShapeMatchResult result =
       Finish(input, params, scorer, std::move(solution), *T_model_scan_guess);
   result.used_guess = true;
