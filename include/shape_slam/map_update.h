@@ -37,6 +37,11 @@ struct MapUpdateParams {
   /// When the scan's pose is not confirmed by a match, only perceived polylines that lie mostly
   /// farther than this from the map are added (new territory); nothing is merged (metres).
   double untrusted_clearance_m = 0.5;
+  /// A perceived polyline that merges nowhere is still not added when more than
+  /// explained_fraction of it lies within explained_distance_m (metres) of the map: the map
+  /// already holds it (clutter seen from another side, fragments of a known wall).
+  double explained_distance_m = 0.10;
+  double explained_fraction = 0.8;
   /// Perceived polylines shorter than this are not added to the map (metres).
   double min_new_length_m = 0.10;
   /// A map polyline is contradicted by a scan when most of its visible samples lie in front of
@@ -71,6 +76,7 @@ struct MapUpdateStats {
   int joined = 0;   ///< map polylines absorbed into another by a merge
   int dropped = 0;  ///< map polylines removed by the contradiction rule
   int unsound = 0;  ///< merges rejected because the result strayed from its inputs
+  int explained = 0;  ///< perceived polylines the map already held (not added)
 };
 
 /// One scan's map update at the final pose: every perceived polyline (map frame) merges into

@@ -48,8 +48,13 @@ struct OdometryNoiseParams {
 struct ShapeSlamParams {
   ExtractionParams extraction;       ///< §3.1 grouping
   DceParams dce;                     ///< §3.1 simplification before shape matching
-  /// Lighter DCE of the same polylines whose samples drive the alignment (§5.1), metres.
+  /// Shape matching compares polylines with at most this many vertices (DCE continued): bounds
+  /// the cost of S on cluttered scans; S* evolves further where that helps (§4.1).
+  int max_shape_vertices = 16;
+  /// Lighter DCE of the same polylines whose samples drive the alignment (§5.1), metres ...
   double alignment_dce_threshold_m = 0.005;
+  /// ... never moving them farther than this from the scan points (metres).
+  double alignment_max_deviation_m = 0.02;
   VisibilityParams visibility;       ///< visible map shape; its fov_rad is set per scan
   /// The visible map shape covers the scan's field of view widened by this on each side, rad.
   double visibility_fov_margin_rad = 0.35;

@@ -27,7 +27,7 @@ struct ShapeMatcherParams {
   /// P of eq. (4): penalty for leaving a polyline unmatched, per metre of its length (units of
   /// S per metre). Linear in size as §4.2 prescribes; a matched pair must cost less than the
   /// two penalties for the match to be taken.
-  double skip_penalty_per_m = 0.15;
+  double skip_penalty_per_m = 0.5;
   /// D of eq. (4) = deviation_weight * ((misfit / deviation_sigma_m)^2 +
   /// (angle / deviation_sigma_rad)^2), where misfit and angle are the RMS distance (m) and
   /// direction difference (rad) of the perceived samples that overlap the model polyline(s)
@@ -35,8 +35,8 @@ struct ShapeMatcherParams {
   /// alignment along the directions the pair constrains (a straight wall does not constrain
   /// sliding along itself, so comparing whole induced transforms would punish right matches).
   double deviation_weight = 1.0;
-  double deviation_sigma_m = 0.25;    ///< metres
-  double deviation_sigma_rad = 0.25;  ///< radians
+  double deviation_sigma_m = 0.5;     ///< metres
+  double deviation_sigma_rad = 0.3;   ///< radians
   /// Gates (with an estimate): pairs whose misfit or angle exceed these are not considered.
   double max_misfit_m = 1.0;     ///< metres
   /// The misfit gate of §4.3's second pass, whose estimate comes from a seed already aligned

@@ -235,8 +235,9 @@ bool SoundMerge(const Polyline& merged, const Polyline& model, const Polyline& p
          FarthestFrom(model, merged, {}) <= tolerance;
 }
 
-// Whether most of a perceived polyline lies within `clearance_m` of the map.
-bool NearMap(const PolylineMap& map, const Polyline& perceived, double clearance_m) {
+// Whether more than `fraction` of a perceived polyline lies within `clearance_m` of the map.
+bool NearMap(const PolylineMap& map, const Polyline& perceived, double clearance_m,
+             double fraction) {
   Point2 min = perceived.front(), max = perceived.front();
   for (const Point2& p : perceived) min = min.cwiseMin(p), max = max.cwiseMax(p);
   const Point2 margin = Point2::Constant(clearance_m);
@@ -257,7 +258,7 @@ bool NearMap(const PolylineMap& map, const Polyline& perceived, double clearance
       }
     }
   }
-  return 2 * near > total;
+  return near > fraction * total;
 }
 
 // Merges a perceived polyline into the corresponding map polylines: into the first, which then
@@ -372,6 +373,10 @@ void MapUpdateParams::Validate() const {
   positive(merge_max_angle_rad, "merge_max_angle_rad");
   positive(contradiction_margin_m, "contradiction_margin_m");
   positive(untrusted_clearance_m, "untrusted_clearance_m");
+  positive(explained_distance_m, "explained_distance_m");
+  if (!(explained_fraction >= 0.0 && explained_fraction <= 1.0)) {
+    throw std::invalid_argument("MapUpdateParams::explained_fraction must be in [0, 1]");
+  }
   if (!(min_incidence_rad >= 0.0 && min_incidence_rad < M_PI / 2)) {
     throw std::invalid_argument("MapUpdateParams::min_incidence_rad must be in [0, pi/2)");
   }
@@ -436,7 +441,7 @@ MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceive
   std::vector<PolylineId> touched;
   for (const Polyline& perceived : perceived_map) {
     if (perceived.size() < 2 || PolylineLength(perceived) < params.min_new_length_m) continue;
-    if (!pose_trusted && NearMap(map, perceived, params.untrusted_clearance_m)) continue;
+    if (!pose_trusted && NearMap(map, perceived, params.untrusted_clearance_m, 0.5)) continue;
     const std::vector<PolylineId> ids =
         pose_trusted ? CorrespondingMapPolylines(map, perceived, params) : std::vector<PolylineId>{};
     if (!ids.empty() && MergeIntoMap(map, perceived, ids, viewpoint, params, stats)) {
@@ -444,6 +449,12 @@ MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceive
       continue;
     }
     if (!ids.empty()) ++stats.unsound;
+    // Already represented (clutter seen again from another side, a fragment of a known wall):
+    // adding it would only duplicate the map.
+    if (NearMap(map, perceived, params.explained_distance_m, params.explained_fraction)) {
+      ++stats.explained;
+      continue;
+    }
     const WeightedPolyline simplified = Simplify(Unweighted(perceived), params.dce_threshold_m, params.max_deviation_m);
     touched.push_back(map.Add({simplified.points, simplified.weights, 1, 0}));
     ++stats.added;

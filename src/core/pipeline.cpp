@@ -57,11 +57,26 @@ struct Shapes {
   std::vector<Polyline> fine;
 };
 
+// DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
+// the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
+Polyline LimitVertices(const Polyline& polyline, int max_vertices) {
+  if (static_cast<int>(polyline.size()) <= max_vertices) return polyline;
+  CurveEvolution evolution(polyline);
+  while (evolution.CanRemove() && evolution.NumVertices() > max_vertices) evolution.RemoveNext();
+  return evolution.Current();
+}
+
+// The polyline as shape matching sees it: DCE at the matching threshold, vertex count bounded.
+Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& params) {
+  return LimitVertices(SimplifyDce(polyline, params.dce.threshold_m), params.max_shape_vertices);
+}
+
 Shapes ExtractShapes(const LaserScan& scan, const ShapeSlamParams& params) {
   Shapes shapes;
   for (const Polyline& raw : ExtractPolylines(scan, params.extraction)) {
-    shapes.coarse.push_back(SimplifyDce(raw, params.dce.threshold_m));
-    shapes.fine.push_back(SimplifyDce(raw, params.alignment_dce_threshold_m));
+    shapes.coarse.push_back(ForShapeMatching(raw, params));
+    shapes.fine.push_back(SimplifyDceBounded(raw, params.alignment_dce_threshold_m,
+                                             params.alignment_max_deviation_m));
   }
   return shapes;
 }
@@ -115,6 +130,10 @@ void ShapeSlamParams::Validate() const {
   extraction.Validate();
   dce.Validate();
   Positive(alignment_dce_threshold_m, "ShapeSlamParams::alignment_dce_threshold_m");
+  Positive(alignment_max_deviation_m, "ShapeSlamParams::alignment_max_deviation_m");
+  if (max_shape_vertices < 2) {
+    throw std::invalid_argument("ShapeSlamParams::max_shape_vertices must be >= 2");
+  }
   visibility.Validate();
   NonNegative(visibility_fov_margin_rad, "ShapeSlamParams::visibility_fov_margin_rad");
   matcher.Validate();
@@ -195,7 +214,8 @@ RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
 // What a scan is localized against, in the sensor frame of the prediction: the visible map shape
 // and the polylines of the most recent keyframe scan.
 struct LocalModel {
-  std::vector<Polyline> map;      // visible map shape, CCW ordered
+  std::vector<Polyline> map;         // visible map shape, CCW ordered
+  std::vector<Polyline> map_coarse;  // the same, as shape matching sees it
   bool map_cyclic = false;
   std::vector<Polyline> recent_coarse;  // last keyframe's polylines (shape matching)
   std::vector<Polyline> recent_fine;    // the same, finer (refinement)
@@ -236,7 +256,7 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   }
   std::vector<Pose2> candidates;
   for (const auto& [shape_model, cyclic] :
-       {std::pair{&model.map, model.map_cyclic}, std::pair{&model.recent_coarse, false}}) {
+       {std::pair{&model.map_coarse, model.map_cyclic}, std::pair{&model.recent_coarse, false}}) {
     if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, params,
                                 loc.matched_pairs)) {
       candidates.push_back(*c);
@@ -294,6 +314,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     visible = map_.Visible(T_map_sensor_pred, visibility);
     LocalModel model;
     for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
+    for (const Polyline& p : model.map) model.map_coarse.push_back(ForShapeMatching(p, params_));
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
     if (last_keyframe_) {
       const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() * last_keyframe_->T_map_sensor;
