@@ -69,6 +69,7 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
     progress.Update(i + 1);
   }
   progress.Finish();
+  out.trajectory = slam.Trajectory();  // corrected by the last pose-graph optimisation
   out.processing_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;

@@ -22,7 +22,9 @@
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
 #include "shape_slam/polyline_extraction.h"
+#include "shape_slam/evaluation.h"
 #include "shape_slam/polyline_map.h"
+#include "shape_slam/pose_graph.h"
 #include "shape_slam/shape_matcher.h"
 #include "shape_slam/visibility.h"
 
@@ -39,9 +41,44 @@ struct KeyframeParams {
 struct OdometryNoiseParams {
   double sigma_xy_m = 0.05;                ///< floor, metres
   double sigma_xy_per_m = 0.20;            ///< metres per metre travelled
-  double sigma_theta_rad = 0.02;           ///< floor, radians
-  double sigma_theta_per_rad = 0.20;       ///< radians per radian turned
+  double sigma_theta_rad = 0.10;           ///< floor, radians
+  double sigma_theta_per_rad = 0.50;       ///< radians per radian turned
   double sigma_theta_per_m = 0.05;         ///< radians per metre travelled
+  void Validate() const;
+};
+
+/// Loop closure over a pose graph of keyframes (beyond the paper, which leaves cycle detection
+/// to future work, §7). Every `search_every` keyframes, the nearest older keyframe within
+/// search_radius_m of the estimate, and at least min_travel_m of driving ago, is matched against
+/// the new one (shape matching with and without the estimate as guess, then refinement); an
+/// accepted match adds a loop edge, and when that edge disagrees with the graph the graph is
+/// optimised and the map rebuilt from the keyframes at their corrected poses.
+struct LoopClosureParams {
+  bool enabled = true;
+  int search_every = 2;             ///< keyframes between loop searches
+  double search_radius_m = 4.0;     ///< metres around the estimate
+  double min_travel_m = 10.0;       ///< metres driven since the candidate keyframe
+  double min_inlier_ratio = 0.6;    ///< of the new scan explained by the old keyframe
+  double min_reverse_inlier_ratio = 0.4;  ///< of the old keyframe explained by the new scan
+  /// Edge covariances are the refinement's (which treats samples as independent) times this.
+  double covariance_scale = 10.0;
+  double sigma_floor_m = 0.02;      ///< edge standard deviation at least, metres
+  double sigma_floor_rad = 0.01;    ///< edge standard deviation at least, radians
+  /// A closure may correct the estimate by at most max_correction_rad and by at most
+  /// max(max_correction_m, max_correction_per_m * distance driven since the old keyframe):
+  /// drift is bounded, look-alike places (a corridor turned by 180 deg) are not.
+  double max_correction_rad = 0.5;
+  double max_correction_m = 1.0;
+  double max_correction_per_m = 0.1;
+  /// A closure that would correct the graph is only used once a second one, within
+  /// confirm_within_keyframes keyframes, asks for the same correction (within the tolerances).
+  int confirm_within_keyframes = 10;
+  double confirm_tolerance_m = 0.2;
+  double confirm_tolerance_rad = 0.05;
+  /// A loop edge that disagrees with the graph by more than this triggers optimisation.
+  double min_correction_m = 0.05;
+  double min_correction_rad = 0.01;
+  PoseGraphParams graph;
   void Validate() const;
 };
 
@@ -65,6 +102,7 @@ struct ShapeSlamParams {
   double coarse_gate_m = 0.6;
   MapUpdateParams map_update;        ///< §5.2
   KeyframeParams keyframe;
+  LoopClosureParams loop_closure;
   OdometryNoiseParams odometry_noise;
   /// Also match each scan against the last keyframe scan's polylines (besides the visible map):
   /// a fresh, undistorted view of the same place that keeps tracking robust where the map is
@@ -115,26 +153,58 @@ class ShapeSlam {
   const PolylineMap& Map() const { return map_; }
   const ShapeSlamParams& Params() const { return params_; }
 
+  /// The pose of every processed scan, corrected by the latest pose-graph optimisation (each
+  /// scan rides on the keyframe it was localized from). This is the trajectory to report.
+  std::vector<StampedPose> Trajectory() const;
+  /// The keyframe pose graph (nodes: keyframes in order; edges: consecutive and loop closures).
+  const PoseGraph& Graph() const { return graph_; }
+  /// Loop-closure edges accepted so far.
+  int NumLoopClosures() const { return num_loop_closures_; }
+
  private:
   struct Prediction {
     Pose2 T_map_robot;
     std::optional<Pose2> T_pred_robot_velocity;  // constant-velocity hint (no odometry)
     std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry
   };
+  struct Keyframe {
+    int node = 0;                        // pose-graph node
+    LaserScan scan;                      // counter-clockwise beams
+    std::vector<Polyline> coarse, fine;  // sensor frame
+    double travel_m = 0.0;               // distance driven when it was taken
+    bool trusted = false;                // its pose was confirmed by a match
+  };
+  struct ScanAnchor {
+    double timestamp_s = 0.0;
+    int keyframe = 0;
+    Pose2 T_keyframe_robot;
+  };
   Prediction Predict(const LaserScan& scan) const;
   bool IsKeyframe(const Pose2& T_map_robot) const;
+  Pose2 KeyframePose(int keyframe) const;
+  void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
+                   const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
+  struct LoopEdge {
+    PoseGraphEdge edge;
+    Pose2 correction;  // what the edge asks of the current keyframe's pose, in its own frame
+    int keyframe = 0;  // the keyframe that found it
+  };
+  std::optional<int> LoopCandidate() const;
+  std::optional<LoopEdge> MatchLoop(int old_index) const;
+  bool SearchLoop();
+  void OptimizeAndRebuild();
 
   ShapeSlamParams params_;
   PolylineMap map_;
+  PoseGraph graph_;
+  std::vector<Keyframe> keyframes_;
+  std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
   std::optional<Pose2> previous_T_map_robot_;  // the one before last, for constant velocity
   std::optional<Pose2> last_T_odom_robot_;
-  std::optional<Pose2> last_keyframe_T_map_robot_;
-  struct KeyframeShapes {
-    Pose2 T_map_sensor;
-    std::vector<Polyline> coarse, fine;  // sensor frame
-  };
-  std::optional<KeyframeShapes> last_keyframe_;
+  double travel_m_ = 0.0;
+  int num_loop_closures_ = 0;
+  std::optional<LoopEdge> pending_loop_;
 };
 
 }  // namespace shape_slam

@@ -1,14 +1,13 @@
 #include "shape_slam/pipeline.h"
 
-#include <Eigen/Cholesky>
-
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "shape_slam/alignment.h"
-#include "shape_slam/internal/model_segments.h"
+#include "shape_slam/internal/localization.h"
 
 namespace shape_slam {
 namespace {
@@ -51,65 +50,28 @@ double FieldOfView(const LaserScan& scan) {
   return span + span / (n - 1);
 }
 
-// The scan's polylines (sensor frame): simplified for shape matching, and finer for alignment.
-struct Shapes {
-  std::vector<Polyline> coarse;
-  std::vector<Polyline> fine;
-};
-
-// DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
-// the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
-Polyline LimitVertices(const Polyline& polyline, int max_vertices) {
-  if (static_cast<int>(polyline.size()) <= max_vertices) return polyline;
-  CurveEvolution evolution(polyline);
-  while (evolution.CanRemove() && evolution.NumVertices() > max_vertices) evolution.RemoveNext();
-  return evolution.Current();
+// Edge covariance from a refinement covariance: scaled (samples are not independent) and floored.
+Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosureParams& params) {
+  Eigen::Matrix3d c = params.covariance_scale * refined;
+  c = 0.5 * (c + c.transpose()).eval();
+  const double fm = params.sigma_floor_m * params.sigma_floor_m;
+  const double fr = params.sigma_floor_rad * params.sigma_floor_rad;
+  c(0, 0) = std::max(c(0, 0), fm);
+  c(1, 1) = std::max(c(1, 1), fm);
+  c(2, 2) = std::max(c(2, 2), fr);
+  // Keep it positive definite whatever the refinement reported.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(c);
+  if (eig.eigenvalues().minCoeff() <= 1e-12) c += Eigen::Vector3d(fm, fm, fr).asDiagonal();
+  return c;
 }
 
-// The polyline as shape matching sees it: DCE at the matching threshold, vertex count bounded.
-Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& params) {
-  return LimitVertices(SimplifyDce(polyline, params.dce.threshold_m), params.max_shape_vertices);
+VisibilityParams VisibilityFor(const LaserScan& scan, bool no_estimate, const ShapeSlamParams& p) {
+  VisibilityParams visibility = p.visibility;
+  visibility.fov_rad =
+      no_estimate ? 2.0 * M_PI
+                  : std::min(2.0 * M_PI, FieldOfView(scan) + 2.0 * p.visibility_fov_margin_rad);
+  return visibility;
 }
-
-Shapes ExtractShapes(const LaserScan& scan, const ShapeSlamParams& params) {
-  Shapes shapes;
-  for (const Polyline& raw : ExtractPolylines(scan, params.extraction)) {
-    shapes.coarse.push_back(ForShapeMatching(raw, params));
-    shapes.fine.push_back(SimplifyDceBounded(raw, params.alignment_dce_threshold_m,
-                                             params.alignment_max_deviation_m));
-  }
-  return shapes;
-}
-
-// Covariance of the odometry increment T_prev_cur, as a prior on the correction.
-Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {
-  const double distance = delta.Translation().norm();
-  const double turn = std::abs(delta.theta);
-  const double sxy = noise.sigma_xy_m + noise.sigma_xy_per_m * distance;
-  const double sth =
-      noise.sigma_theta_rad + noise.sigma_theta_per_rad * turn + noise.sigma_theta_per_m * distance;
-  return Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
-}
-
-std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m) {
-  std::vector<Point2> samples;
-  for (const Polyline& p : fine) {
-    const std::vector<Point2> s = SamplePolyline(p, spacing_m);
-    samples.insert(samples.end(), s.begin(), s.end());
-  }
-  return samples;
-}
-
-// The estimated correction T_pred_sensor (sensor frame at the prediction -> at the estimate).
-struct Localization {
-  Pose2 correction;
-  double coverage = 0.0;  // fraction of the scan within new_territory_distance_m of the map
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
-  bool trusted = false;
-  int matched_pairs = 0;
-  double inlier_ratio = 0.0;
-  double rms_error_m = 0.0;
-};
 
 }  // namespace
 
@@ -140,6 +102,7 @@ void ShapeSlamParams::Validate() const {
   refinement.Validate();
   map_update.Validate();
   keyframe.Validate();
+  loop_closure.Validate();
   odometry_noise.Validate();
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::min_inlier_ratio must be in [0, 1]");
@@ -151,6 +114,30 @@ void ShapeSlamParams::Validate() const {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
   Positive(max_prior_mahalanobis, "ShapeSlamParams::max_prior_mahalanobis");
+}
+
+void LoopClosureParams::Validate() const {
+  if (search_every < 1) throw std::invalid_argument("LoopClosureParams::search_every must be >= 1");
+  Positive(search_radius_m, "LoopClosureParams::search_radius_m");
+  NonNegative(min_travel_m, "LoopClosureParams::min_travel_m");
+  Positive(covariance_scale, "LoopClosureParams::covariance_scale");
+  Positive(sigma_floor_m, "LoopClosureParams::sigma_floor_m");
+  Positive(sigma_floor_rad, "LoopClosureParams::sigma_floor_rad");
+  NonNegative(min_correction_m, "LoopClosureParams::min_correction_m");
+  NonNegative(min_correction_rad, "LoopClosureParams::min_correction_rad");
+  Positive(max_correction_rad, "LoopClosureParams::max_correction_rad");
+  if (confirm_within_keyframes < 1) {
+    throw std::invalid_argument("LoopClosureParams::confirm_within_keyframes must be >= 1");
+  }
+  NonNegative(confirm_tolerance_m, "LoopClosureParams::confirm_tolerance_m");
+  NonNegative(confirm_tolerance_rad, "LoopClosureParams::confirm_tolerance_rad");
+  Positive(max_correction_m, "LoopClosureParams::max_correction_m");
+  NonNegative(max_correction_per_m, "LoopClosureParams::max_correction_per_m");
+  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0) ||
+      !(min_reverse_inlier_ratio >= 0.0 && min_reverse_inlier_ratio <= 1.0)) {
+    throw std::invalid_argument("LoopClosureParams: inlier ratios must be in [0, 1]");
+  }
+  graph.Validate();
 }
 
 ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
@@ -174,159 +161,170 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
 }
 
 bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
-  if (!last_keyframe_T_map_robot_) return true;
-  const Pose2 moved = last_keyframe_T_map_robot_->Inverse() * T_map_robot;
+  if (keyframes_.empty()) return true;
+  const Pose2 moved = KeyframePose(static_cast<int>(keyframes_.size()) - 1).Inverse() * T_map_robot;
   return moved.Translation().norm() >= params_.keyframe.min_translation_m ||
          std::abs(moved.theta) >= params_.keyframe.min_rotation_rad;
 }
 
-namespace {
+Pose2 ShapeSlam::KeyframePose(int keyframe) const { return graph_.Node(keyframes_[keyframe].node); }
 
-// Fraction of the samples within the grid's radius of the model at an estimate.
-double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGrid& grid,
-                   const Pose2& T_model_scan) {
-  int inliers = 0;
-  for (const Point2& p : samples) inliers += grid.Nearest(T_model_scan * p).segment >= 0 ? 1 : 0;
-  return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
-}
-
-// Whether an estimate lies within max_sigma standard deviations (Mahalanobis) of the prior.
-bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma) {
-  const Pose2 d = prior.T_map_scan.Inverse() * estimate;
-  const Eigen::Vector3d e(d.x, d.y, d.theta);
-  return e.dot(prior.covariance.ldlt().solve(e)) <= max_sigma * max_sigma;
-}
-
-// Refines an estimate against every visible map polyline: with a wide gate first (odometry-size
-// errors), then with the configured one.
-RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
-                                  const std::vector<Polyline>& model, const Pose2& init,
-                                  const std::optional<PosePrior>& prior,
-                                  const ShapeSlamParams& params) {
-  RefinementParams coarse = params.refinement;
-  coarse.max_correspondence_distance_m =
-      std::max(params.coarse_gate_m, params.refinement.max_correspondence_distance_m);
-  coarse.loss_scale_m = std::max(coarse.loss_scale_m, params.coarse_gate_m / 4.0);
-  const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
-  return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
-}
-
-// What a scan is localized against, in the sensor frame of the prediction: the visible map shape
-// and the polylines of the most recent keyframe scan.
-struct LocalModel {
-  std::vector<Polyline> map;         // visible map shape, CCW ordered
-  std::vector<Polyline> map_coarse;  // the same, as shape matching sees it
-  bool map_cyclic = false;
-  std::vector<Polyline> recent_coarse;  // last keyframe's polylines (shape matching)
-  std::vector<Polyline> recent_fine;    // the same, finer (refinement)
-};
-
-// Shape matching (§4.2, §4.3) of the scan against one model; its alignment is a candidate.
-std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Polyline>& model,
-                                    bool model_cyclic, const std::optional<Pose2>& guess,
-                                    const std::optional<Pose2>& velocity_hint,
-                                    const ShapeSlamParams& params, int& matched_pairs) {
-  if (model.empty()) return std::nullopt;
-  ShapeMatchInput input;
-  input.scan = shapes.coarse;
-  input.scan_fine = shapes.fine;
-  input.model = model;
-  input.model_cyclic = model_cyclic || !guess;
-  if (!guess) {
-    input.hint_estimates.push_back(Pose2());  // the robot did not move
-    if (velocity_hint) input.hint_estimates.push_back(*velocity_hint);
+// A new pose-graph node, tied to the previous keyframe by the front end's relative estimate.
+void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
+                            std::vector<Polyline> fine, const Pose2& T_map_robot, bool trusted,
+                            const Eigen::Matrix3d& covariance) {
+  const int node = graph_.AddNode(T_map_robot);
+  if (!keyframes_.empty()) {
+    PoseGraphEdge edge;
+    edge.from = keyframes_.back().node;
+    edge.to = node;
+    edge.T_from_to = KeyframePose(static_cast<int>(keyframes_.size()) - 1).Inverse() * T_map_robot;
+    // An unconfirmed step (odometry or nothing) is a weak constraint.
+    const Eigen::Matrix3d weak = Eigen::Vector3d(0.3 * 0.3, 0.3 * 0.3, 0.1 * 0.1).asDiagonal();
+    edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure) : weak;
+    graph_.AddEdge(edge);
   }
-  const ShapeMatchResult match = MatchShapes(input, guess, params.matcher);
-  matched_pairs = std::max(matched_pairs, static_cast<int>(match.matches.size()));
-  if (match.matches.empty()) return std::nullopt;
-  return match.T_model_scan;
+  keyframes_.push_back({node, scan, std::move(coarse), std::move(fine), travel_m_, trusted});
 }
 
-// Candidates from shape matching against the map and against the last keyframe, and the
-// prediction itself, are each refined against both; the one explaining most of the scan wins.
-Localization Localize(const Shapes& shapes, const LocalModel& model,
-                      const std::optional<Pose2>& odometry_delta,
-                      const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params) {
-  Localization loc;
-  std::optional<Pose2> guess;
-  std::optional<PosePrior> prior;
-  if (odometry_delta) {
-    guess = Pose2();  // the model is already seen from the odometry prediction
-    prior = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
+// The nearest keyframe within the search radius that lies far enough back along the path.
+std::optional<int> ShapeSlam::LoopCandidate() const {
+  const LoopClosureParams& p = params_.loop_closure;
+  const int current = static_cast<int>(keyframes_.size()) - 1;
+  const Pose2 P_now = KeyframePose(current);
+  std::optional<int> best;
+  double best_distance = p.search_radius_m;
+  for (int k = 0; k < current; ++k) {
+    if (keyframes_[current].travel_m - keyframes_[k].travel_m < p.min_travel_m) break;  // in order
+    const double d = (KeyframePose(k).Translation() - P_now.Translation()).norm();
+    if (d <= best_distance) best_distance = d, best = k;
   }
-  std::vector<Pose2> candidates;
-  for (const auto& [shape_model, cyclic] :
-       {std::pair{&model.map_coarse, model.map_cyclic}, std::pair{&model.recent_coarse, false}}) {
-    if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, params,
-                                loc.matched_pairs)) {
-      candidates.push_back(*c);
-    }
-  }
-  if (guess) candidates.push_back(*guess);
-  std::vector<Polyline> all = model.map;
-  all.insert(all.end(), model.recent_fine.begin(), model.recent_fine.end());
-  const std::vector<Point2> samples =
-      AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
-  if (samples.empty() || all.empty()) return loc;
-  const internal::SegmentGrid grid(internal::MakeModelSegments(all), params.matcher.inlier_distance_m);
-  double best_ratio = -1.0;
-  for (const Pose2& candidate : candidates) {
-    const RefinementResult refined = RefineAgainstMap(samples, all, candidate, prior, params);
-    if (!refined.converged) continue;
-    if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
-    const double ratio = InlierRatio(samples, grid, refined.T_map_scan);
-    if (ratio <= best_ratio) continue;
-    best_ratio = ratio;
-    loc.correction = refined.T_map_scan;
-    loc.covariance = refined.covariance;
-    loc.rms_error_m = refined.rms_error_m;
-    loc.inlier_ratio = ratio;
-    loc.trusted = ratio >= params.min_inlier_ratio;
-  }
-  if (!loc.trusted) loc.correction = Pose2();
-  const internal::SegmentGrid near_grid(internal::MakeModelSegments(all),
-                                        params.new_territory_distance_m);
-  loc.coverage = InlierRatio(samples, near_grid, loc.correction);
-  return loc;
+  return best;
 }
 
-}  // namespace
+// Matches the newest keyframe against an old one; the loop edge when the match is good and its
+// correction plausible. Drift since the old keyframe is bounded: a closure demanding more is a
+// look-alike place (a corridor fits itself turned by 180 deg).
+std::optional<ShapeSlam::LoopEdge> ShapeSlam::MatchLoop(int old_index) const {
+  const LoopClosureParams& p = params_.loop_closure;
+  const int current = static_cast<int>(keyframes_.size()) - 1;
+  const Keyframe& now = keyframes_[current];
+  const Keyframe& old = keyframes_[old_index];
+  const Pose2 T_old_now = KeyframePose(old_index).Inverse() * KeyframePose(current);
+  const Pose2 estimate = old.scan.T_robot_sensor.Inverse() * T_old_now * now.scan.T_robot_sensor;
+  const std::optional<internal::KeyframeMatch> m =
+      internal::MatchKeyframe({now.coarse, now.fine}, {old.coarse, old.fine}, estimate, params_);
+  if (!m || m->inlier_ratio < p.min_inlier_ratio ||
+      m->reverse_inlier_ratio < p.min_reverse_inlier_ratio) {
+    return std::nullopt;
+  }
+  LoopEdge loop;
+  loop.edge = {old.node, now.node,
+               old.scan.T_robot_sensor * m->T_keyframe_scan * now.scan.T_robot_sensor.Inverse(),
+               EdgeCovariance(m->covariance, p), true};
+  loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
+  loop.keyframe = current;
+  const double travelled = now.travel_m - old.travel_m;
+  if (std::abs(loop.correction.theta) > p.max_correction_rad ||
+      loop.correction.Translation().norm() >
+          std::max(p.max_correction_m, p.max_correction_per_m * travelled)) {
+    return std::nullopt;
+  }
+  return loop;
+}
+
+// Every search_every keyframes: looks for a loop closure. A closure that agrees with the graph
+// is added at once; one that would correct it is held until a second closure soon after asks
+// for the same correction (a single look-alike match must not bend the map). Returns true when
+// the graph needs optimising.
+bool ShapeSlam::SearchLoop() {
+  const LoopClosureParams& p = params_.loop_closure;
+  const int current = static_cast<int>(keyframes_.size()) - 1;
+  if (!p.enabled || current % p.search_every != 0) return false;
+  const std::optional<int> old = LoopCandidate();
+  if (!old) return false;
+  const std::optional<LoopEdge> loop = MatchLoop(*old);
+  if (!loop) return false;
+  const Pose2& c = loop->correction;
+  if (c.Translation().norm() <= p.min_correction_m && std::abs(c.theta) <= p.min_correction_rad) {
+    graph_.AddEdge(loop->edge);
+    ++num_loop_closures_;
+    return false;
+  }
+  const bool confirmed =
+      pending_loop_ && current - pending_loop_->keyframe <= p.confirm_within_keyframes &&
+      (pending_loop_->correction.Translation() - c.Translation()).norm() <=
+          p.confirm_tolerance_m + 0.2 * c.Translation().norm() &&
+      std::abs(NormalizeAngle(pending_loop_->correction.theta - c.theta)) <= p.confirm_tolerance_rad;
+  if (!confirmed) {
+    pending_loop_ = loop;
+    return false;
+  }
+  graph_.AddEdge(pending_loop_->edge);
+  graph_.AddEdge(loop->edge);
+  num_loop_closures_ += 2;
+  pending_loop_.reset();
+  return true;
+}
+
+// Optimises the pose graph, then rebuilds the map from every keyframe at its corrected pose.
+void ShapeSlam::OptimizeAndRebuild() {
+  graph_.Optimize(params_.loop_closure.graph);
+  map_.Clear();
+  for (const Keyframe& kf : keyframes_) {
+    const Pose2 T_map_sensor = graph_.Node(kf.node) * kf.scan.T_robot_sensor;
+    std::vector<Polyline> perceived;
+    for (const Polyline& p : kf.fine) perceived.push_back(Transform(T_map_sensor, p));
+    const std::vector<VisiblePolyline> visible =
+        map_.Visible(T_map_sensor, VisibilityFor(kf.scan, false, params_));
+    UpdateMap(map_, perceived, T_map_sensor, visible, kf.scan, kf.trusted || map_.Empty(),
+              params_.map_update);
+  }
+}
+
+std::vector<StampedPose> ShapeSlam::Trajectory() const {
+  std::vector<StampedPose> trajectory;
+  trajectory.reserve(anchors_.size());
+  for (const ScanAnchor& a : anchors_) {
+    trajectory.push_back({a.timestamp_s, KeyframePose(a.keyframe) * a.T_keyframe_robot});
+  }
+  return trajectory;
+}
 
 ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   ValidateScan(input_scan);
   const LaserScan scan = CounterClockwise(input_scan);
   ScanReport report;
   report.timestamp_s = scan.timestamp_s;
-  const Shapes shapes = ExtractShapes(scan, params_);
+  internal::Shapes shapes = internal::ExtractShapes(scan, params_);
   report.polylines = static_cast<int>(shapes.coarse.size());
   const Prediction prediction = Predict(scan);
   report.used_odometry = prediction.odometry_delta.has_value();
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
 
-  Localization loc;
+  internal::Localization loc;
   std::vector<VisiblePolyline> visible;
   if (!map_.Empty() && !shapes.coarse.empty()) {
-    const bool no_estimate = !prediction.odometry_delta;
-    VisibilityParams visibility = params_.visibility;
-    visibility.fov_rad = no_estimate ? 2.0 * M_PI
-                                     : std::min(2.0 * M_PI, FieldOfView(scan) +
-                                                                2.0 * params_.visibility_fov_margin_rad);
+    const VisibilityParams visibility = VisibilityFor(scan, !prediction.odometry_delta, params_);
     visible = map_.Visible(T_map_sensor_pred, visibility);
-    LocalModel model;
+    internal::LocalModel model;
     for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
-    for (const Polyline& p : model.map) model.map_coarse.push_back(ForShapeMatching(p, params_));
+    for (const Polyline& p : model.map) model.map_coarse.push_back(internal::ForShapeMatching(p, params_));
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
-    if (last_keyframe_) {
-      const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() * last_keyframe_->T_map_sensor;
-      for (const Polyline& p : last_keyframe_->coarse) model.recent_coarse.push_back(Transform(T_pred_keyframe, p));
-      for (const Polyline& p : last_keyframe_->fine) model.recent_fine.push_back(Transform(T_pred_keyframe, p));
+    if (params_.use_last_keyframe && !keyframes_.empty()) {
+      const Keyframe& last = keyframes_.back();
+      const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() *
+                                    KeyframePose(static_cast<int>(keyframes_.size()) - 1) *
+                                    last.scan.T_robot_sensor;
+      for (const Polyline& p : last.coarse) model.recent_coarse.push_back(Transform(T_pred_keyframe, p));
+      for (const Polyline& p : last.fine) model.recent_fine.push_back(Transform(T_pred_keyframe, p));
     }
     std::optional<Pose2> velocity_hint;
     if (prediction.T_pred_robot_velocity) {
       velocity_hint = scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity *
                       scan.T_robot_sensor;
     }
-    loc = Localize(shapes, model, prediction.odometry_delta, velocity_hint, params_);
+    loc = internal::Localize(shapes, model, prediction.odometry_delta, velocity_hint, params_);
   }
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
@@ -335,6 +333,9 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.matched_pairs = loc.matched_pairs;
   report.inlier_ratio = loc.inlier_ratio;
   report.rms_error_m = loc.rms_error_m;
+  if (last_T_map_robot_) {
+    travel_m_ += (last_T_map_robot_->Translation() - report.T_map_robot.Translation()).norm();
+  }
 
   // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
   // (new territory); elsewhere it would blur or duplicate what is there.
@@ -345,12 +346,21 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
     const Pose2 correction_inverse = loc.correction.Inverse();
     for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
+    const bool trusted = loc.trusted || map_.Empty();
     report.map_update =
-        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, loc.trusted || map_.Empty(),
-                  params_.map_update);
+        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
     report.keyframe = true;
-    last_keyframe_T_map_robot_ = report.T_map_robot;
-    if (params_.use_last_keyframe) last_keyframe_ = KeyframeShapes{T_map_sensor, shapes.coarse, shapes.fine};
+    AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), report.T_map_robot,
+                trusted, loc.covariance);
+    if (SearchLoop()) {
+      OptimizeAndRebuild();
+      report.T_map_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
+      last_T_map_robot_ = report.T_map_robot;  // the velocity estimate restarts from rest
+    }
+  }
+  if (!keyframes_.empty()) {
+    const int k = static_cast<int>(keyframes_.size()) - 1;
+    anchors_.push_back({scan.timestamp_s, k, KeyframePose(k).Inverse() * report.T_map_robot});
   }
   previous_T_map_robot_ = last_T_map_robot_;
   last_T_map_robot_ = report.T_map_robot;

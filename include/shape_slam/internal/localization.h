@@ -1,0 +1,78 @@
+// Internal (not installed): the localization step of the pipeline (pipeline.h) -- the scan's
+// shapes, the local model it is matched against, and the choice among the candidate estimates
+// that shape matching (§4.2, §4.3) and the prediction provide -- shared by pipeline.cpp (the
+// per-scan step and loop closures) and its tests.
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "shape_slam/internal/model_segments.h"
+#include "shape_slam/pipeline.h"
+
+namespace shape_slam::internal {
+
+/// A scan's polylines (sensor frame): as shape matching sees them, and finer for alignment.
+struct Shapes {
+  std::vector<Polyline> coarse;
+  std::vector<Polyline> fine;
+};
+
+/// Extraction (§3.1) and the two simplifications of one scan.
+Shapes ExtractShapes(const LaserScan& scan, const ShapeSlamParams& params);
+
+/// A polyline as shape matching sees it: DCE at the matching threshold, vertex count bounded.
+Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& params);
+
+/// Samples of the alignment polylines every spacing_m (§5.1).
+std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m);
+
+/// Covariance of an odometry increment T_prev_cur under the noise model.
+Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
+
+/// Fraction of the samples within the grid's radius of the model at an estimate.
+double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
+                   const Pose2& T_model_scan);
+
+/// What a scan is localized against, in the sensor frame of the prediction.
+struct LocalModel {
+  std::vector<Polyline> map;            ///< visible map shape, CCW ordered
+  std::vector<Polyline> map_coarse;     ///< the same, as shape matching sees it
+  bool map_cyclic = false;
+  std::vector<Polyline> recent_coarse;  ///< last keyframe's polylines (shape matching)
+  std::vector<Polyline> recent_fine;    ///< the same, finer (refinement)
+};
+
+/// The estimated correction T_pred_sensor (sensor frame at the prediction -> at the estimate).
+struct Localization {
+  Pose2 correction;
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
+  bool trusted = false;
+  int matched_pairs = 0;
+  double inlier_ratio = 0.0;
+  double rms_error_m = 0.0;
+  double coverage = 0.0;  ///< fraction of the scan within new_territory_distance_m of the model
+};
+
+/// Candidates from shape matching against the map and against the last keyframe, and the
+/// prediction itself, each refined against both; the one explaining most of the scan wins.
+Localization Localize(const Shapes& shapes, const LocalModel& model,
+                      const std::optional<Pose2>& odometry_delta,
+                      const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params);
+
+/// A scan matched against one keyframe's shapes (a loop closure candidate).
+struct KeyframeMatch {
+  Pose2 T_keyframe_scan;          ///< sensor frames
+  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  double inlier_ratio = 0.0;      ///< scan samples explained by the keyframe
+  double reverse_inlier_ratio = 0.0;  ///< keyframe samples explained by the scan
+};
+
+/// Matches a scan against a keyframe (both in their own sensor frames), by shape matching with
+/// the estimate as guess and without a guess (§4.3), each refined; the best fit, or nullopt.
+std::optional<KeyframeMatch> MatchKeyframe(const Shapes& scan, const Shapes& keyframe,
+                                           const Pose2& T_keyframe_scan_estimate,
+                                           const ShapeSlamParams& params);
+
+}  // namespace shape_slam::internal

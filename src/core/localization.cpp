@@ -1,0 +1,197 @@
+#include "shape_slam/internal/localization.h"
+
+#include <Eigen/Cholesky>
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "shape_slam/alignment.h"
+#include "shape_slam/discrete_curve_evolution.h"
+#include "shape_slam/polyline_extraction.h"
+#include "shape_slam/shape_matcher.h"
+
+namespace shape_slam::internal {
+namespace {
+
+// DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
+// the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
+Polyline LimitVertices(const Polyline& polyline, int max_vertices) {
+  if (static_cast<int>(polyline.size()) <= max_vertices) return polyline;
+  CurveEvolution evolution(polyline);
+  while (evolution.CanRemove() && evolution.NumVertices() > max_vertices) evolution.RemoveNext();
+  return evolution.Current();
+}
+
+// Whether an estimate lies within max_sigma standard deviations (Mahalanobis) of the prior.
+bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma) {
+  const Pose2 d = prior.T_map_scan.Inverse() * estimate;
+  const Eigen::Vector3d e(d.x, d.y, d.theta);
+  return e.dot(prior.covariance.ldlt().solve(e)) <= max_sigma * max_sigma;
+}
+
+// Refines an estimate against every visible map polyline: with a wide gate first (odometry-size
+// errors), then with the configured one.
+RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
+                                  const std::vector<Polyline>& model, const Pose2& init,
+                                  const std::optional<PosePrior>& prior,
+                                  const ShapeSlamParams& params) {
+  RefinementParams coarse = params.refinement;
+  coarse.max_correspondence_distance_m =
+      std::max(params.coarse_gate_m, params.refinement.max_correspondence_distance_m);
+  coarse.loss_scale_m = std::max(coarse.loss_scale_m, params.coarse_gate_m / 4.0);
+  const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
+  return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
+}
+
+// Shape matching (§4.2, §4.3) of the scan against one model; its alignment is a candidate.
+std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Polyline>& model,
+                                    bool model_cyclic, const std::optional<Pose2>& guess,
+                                    const std::optional<Pose2>& velocity_hint,
+                                    const ShapeSlamParams& params, int& matched_pairs) {
+  if (model.empty()) return std::nullopt;
+  ShapeMatchInput input;
+  input.scan = shapes.coarse;
+  input.scan_fine = shapes.fine;
+  input.model = model;
+  input.model_cyclic = model_cyclic || !guess;
+  if (!guess) {
+    input.hint_estimates.push_back(Pose2());  // the robot did not move
+    if (velocity_hint) input.hint_estimates.push_back(*velocity_hint);
+  }
+  const ShapeMatchResult match = MatchShapes(input, guess, params.matcher);
+  matched_pairs = std::max(matched_pairs, static_cast<int>(match.matches.size()));
+  if (match.matches.empty()) return std::nullopt;
+  return match.T_model_scan;
+}
+
+}  // namespace
+
+// The polyline as shape matching sees it: DCE at the matching threshold, vertex count bounded.
+Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& params) {
+  return LimitVertices(SimplifyDce(polyline, params.dce.threshold_m), params.max_shape_vertices);
+}
+
+Shapes ExtractShapes(const LaserScan& scan, const ShapeSlamParams& params) {
+  Shapes shapes;
+  for (const Polyline& raw : ExtractPolylines(scan, params.extraction)) {
+    shapes.coarse.push_back(ForShapeMatching(raw, params));
+    shapes.fine.push_back(SimplifyDceBounded(raw, params.alignment_dce_threshold_m,
+                                             params.alignment_max_deviation_m));
+  }
+  return shapes;
+}
+
+// Covariance of the odometry increment T_prev_cur, as a prior on the correction.
+Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {
+  const double distance = delta.Translation().norm();
+  const double turn = std::abs(delta.theta);
+  const double sxy = noise.sigma_xy_m + noise.sigma_xy_per_m * distance;
+  const double sth =
+      noise.sigma_theta_rad + noise.sigma_theta_per_rad * turn + noise.sigma_theta_per_m * distance;
+  return Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
+}
+
+std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m) {
+  std::vector<Point2> samples;
+  for (const Polyline& p : fine) {
+    const std::vector<Point2> s = SamplePolyline(p, spacing_m);
+    samples.insert(samples.end(), s.begin(), s.end());
+  }
+  return samples;
+}
+
+// Fraction of the samples within the grid's radius of the model at an estimate.
+double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGrid& grid,
+                   const Pose2& T_model_scan) {
+  int inliers = 0;
+  for (const Point2& p : samples) inliers += grid.Nearest(T_model_scan * p).segment >= 0 ? 1 : 0;
+  return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
+}
+
+// Candidates from shape matching against the map and against the last keyframe, and the
+// prediction itself, are each refined against both; the one explaining most of the scan wins.
+Localization Localize(const Shapes& shapes, const LocalModel& model,
+                      const std::optional<Pose2>& odometry_delta,
+                      const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params) {
+  Localization loc;
+  std::optional<Pose2> guess;
+  std::optional<PosePrior> prior;
+  if (odometry_delta) {
+    guess = Pose2();  // the model is already seen from the odometry prediction
+    prior = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
+  }
+  std::vector<Pose2> candidates;
+  for (const auto& [shape_model, cyclic] :
+       {std::pair{&model.map_coarse, model.map_cyclic}, std::pair{&model.recent_coarse, false}}) {
+    if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, params,
+                                loc.matched_pairs)) {
+      candidates.push_back(*c);
+    }
+  }
+  if (guess) candidates.push_back(*guess);
+  std::vector<Polyline> all = model.map;
+  all.insert(all.end(), model.recent_fine.begin(), model.recent_fine.end());
+  const std::vector<Point2> samples =
+      AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
+  if (samples.empty() || all.empty()) return loc;
+  const internal::SegmentGrid grid(internal::MakeModelSegments(all), params.matcher.inlier_distance_m);
+  double best_ratio = -1.0;
+  for (const Pose2& candidate : candidates) {
+    const RefinementResult refined = RefineAgainstMap(samples, all, candidate, prior, params);
+    if (!refined.converged) continue;
+    if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
+    const double ratio = InlierRatio(samples, grid, refined.T_map_scan);
+    if (ratio <= best_ratio) continue;
+    best_ratio = ratio;
+    loc.correction = refined.T_map_scan;
+    loc.covariance = refined.covariance;
+    loc.rms_error_m = refined.rms_error_m;
+    loc.inlier_ratio = ratio;
+    loc.trusted = ratio >= params.min_inlier_ratio;
+  }
+  if (!loc.trusted) loc.correction = Pose2();
+  const internal::SegmentGrid near_grid(internal::MakeModelSegments(all),
+                                        params.new_territory_distance_m);
+  loc.coverage = InlierRatio(samples, near_grid, loc.correction);
+  return loc;
+}
+
+std::optional<KeyframeMatch> MatchKeyframe(const Shapes& scan, const Shapes& keyframe,
+                                           const Pose2& T_keyframe_scan_estimate,
+                                           const ShapeSlamParams& params) {
+  if (scan.coarse.empty() || keyframe.coarse.empty()) return std::nullopt;
+  std::vector<Pose2> candidates = {T_keyframe_scan_estimate};
+  int pairs = 0;
+  // With the estimate as guess, and without any (§4.3: the drift before a loop closes can
+  // exceed what a guess-based match tolerates).
+  if (auto c = ShapeCandidate(scan, keyframe.coarse, false, T_keyframe_scan_estimate,
+                              std::nullopt, params, pairs)) {
+    candidates.push_back(*c);
+  }
+  if (auto c = ShapeCandidate(scan, keyframe.coarse, true, std::nullopt, T_keyframe_scan_estimate,
+                              params, pairs)) {
+    candidates.push_back(*c);
+  }
+  const double spacing = params.matcher.alignment.sample_spacing_m;
+  const std::vector<Point2> samples = AlignmentSamples(scan.fine, spacing);
+  const std::vector<Point2> keyframe_samples = AlignmentSamples(keyframe.fine, spacing);
+  if (samples.empty() || keyframe_samples.empty()) return std::nullopt;
+  const SegmentGrid keyframe_grid(MakeModelSegments(keyframe.fine), params.matcher.inlier_distance_m);
+  std::optional<KeyframeMatch> best;
+  for (const Pose2& candidate : candidates) {
+    const RefinementResult refined =
+        RefineAgainstMap(samples, keyframe.fine, candidate, std::nullopt, params);
+    if (!refined.converged) continue;
+    const double ratio = InlierRatio(samples, keyframe_grid, refined.T_map_scan);
+    if (best && ratio <= best->inlier_ratio) continue;
+    best = KeyframeMatch{refined.T_map_scan, refined.covariance, ratio, 0.0};
+  }
+  if (best) {
+    const SegmentGrid scan_grid(MakeModelSegments(scan.fine), params.matcher.inlier_distance_m);
+    best->reverse_inlier_ratio =
+        InlierRatio(keyframe_samples, scan_grid, best->T_keyframe_scan.Inverse());
+  }
+  return best;
+}
+
+}  // namespace shape_slam::internal

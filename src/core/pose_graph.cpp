@@ -1,0 +1,87 @@
+#include "shape_slam/pose_graph.h"
+
+#include <ceres/ceres.h>
+
+#include <Eigen/Cholesky>
+#include <array>
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "shape_slam/internal/relative_pose_cost.h"
+
+namespace shape_slam {
+namespace {
+
+// S with S^T S = covariance^-1.
+Eigen::Matrix3d SqrtInformation(const Eigen::Matrix3d& covariance) {
+  const Eigen::LLT<Eigen::Matrix3d> llt(covariance.inverse());
+  return llt.matrixU();
+}
+
+bool SymmetricPositiveDefinite(const Eigen::Matrix3d& m) {
+  if (!m.allFinite() || !m.isApprox(m.transpose(), 1e-9)) return false;
+  const Eigen::LLT<Eigen::Matrix3d> llt(m);
+  return llt.info() == Eigen::Success;
+}
+
+}  // namespace
+
+void PoseGraphParams::Validate() const {
+  if (!(loop_loss_scale > 0.0) || !std::isfinite(loop_loss_scale)) {
+    throw std::invalid_argument("PoseGraphParams::loop_loss_scale must be > 0");
+  }
+  if (max_iterations < 1) throw std::invalid_argument("PoseGraphParams::max_iterations must be >= 1");
+}
+
+int PoseGraph::AddNode(const Pose2& T_map_node) {
+  poses_.push_back(T_map_node);
+  return static_cast<int>(poses_.size()) - 1;
+}
+
+void PoseGraph::AddEdge(const PoseGraphEdge& edge) {
+  const int n = NumNodes();
+  if (edge.from < 0 || edge.from >= n || edge.to < 0 || edge.to >= n || edge.from == edge.to) {
+    throw std::invalid_argument("PoseGraph::AddEdge: bad node indices " + std::to_string(edge.from) +
+                                " -> " + std::to_string(edge.to));
+  }
+  if (!SymmetricPositiveDefinite(edge.covariance)) {
+    throw std::invalid_argument("PoseGraph::AddEdge: covariance is not symmetric positive definite");
+  }
+  edges_.push_back(edge);
+}
+
+PoseGraphResult PoseGraph::Optimize(const PoseGraphParams& params) {
+  params.Validate();
+  PoseGraphResult result;
+  if (poses_.size() < 2) return result;
+  std::vector<std::array<double, 3>> x(poses_.size());
+  for (std::size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
+  ceres::Problem::Options problem_options;
+  ceres::Problem problem(problem_options);
+  for (const PoseGraphEdge& e : edges_) {
+    ceres::LossFunction* loss = e.loop ? new ceres::CauchyLoss(params.loop_loss_scale) : nullptr;
+    problem.AddResidualBlock(
+        internal::RelativePoseCost::Create(e.T_from_to, SqrtInformation(e.covariance)), loss,
+        x[e.from].data(), x[e.to].data());
+  }
+  problem.SetParameterBlockConstant(x[0].data());
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = params.max_iterations;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  ceres::Solver::Summary summary;
+  ceres::Solve(options, &problem, &summary);
+  for (std::size_t i = 0; i < poses_.size(); ++i) {
+    poses_[i] = Pose2(x[i][0], x[i][1], NormalizeAngle(x[i][2]));
+  }
+  result.converged = summary.termination_type == ceres::CONVERGENCE;
+  result.iterations = static_cast<int>(summary.iterations.size());
+  result.initial_cost = summary.initial_cost;
+  result.final_cost = summary.final_cost;
+  return result;
+}
+
+}  // namespace shape_slam
