@@ -51,11 +51,24 @@ struct Pose2 {
   }
 };
 
+/// A pose prepared for mapping many points: its rotation is computed once, not per point.
+class PointTransform {
+ public:
+  explicit PointTransform(const Pose2& T_b_a) : R_(T_b_a.Rotation()), t_(T_b_a.Translation()) {}
+  Point2 operator()(const Point2& p_a) const { return R_ * p_a + t_; }
+  const Eigen::Matrix2d& Rotation() const { return R_; }
+
+ private:
+  Eigen::Matrix2d R_;
+  Point2 t_;
+};
+
 /// Applies a pose to every vertex of a polyline.
 inline Polyline Transform(const Pose2& T_b_a, const Polyline& polyline_a) {
+  const PointTransform T(T_b_a);
   Polyline out;
   out.reserve(polyline_a.size());
-  for (const Point2& p : polyline_a) out.push_back(T_b_a * p);
+  for (const Point2& p : polyline_a) out.push_back(T(p));
   return out;
 }
 

@@ -1,5 +1,7 @@
 #include "shape_slam/internal/localization.h"
 
+#include "shape_slam/internal/model_icp.h"
+
 #include <Eigen/Cholesky>
 #include <algorithm>
 #include <cmath>
@@ -12,6 +14,9 @@
 
 namespace shape_slam::internal {
 namespace {
+
+// Point-to-point ICP steps that finish each candidate before they are compared.
+constexpr int kCandidateIcpIterations = 8;
 
 // DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
 // the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
@@ -104,12 +109,30 @@ std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double s
 double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGrid& grid,
                    const Pose2& T_model_scan) {
   int inliers = 0;
-  for (const Point2& p : samples) inliers += grid.Nearest(T_model_scan * p).segment >= 0 ? 1 : 0;
+  const PointTransform transform(T_model_scan);
+  for (const Point2& p : samples) inliers += grid.Nearest(transform(p)).segment >= 0 ? 1 : 0;
   return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
 }
 
 // Candidates from shape matching against the map and against the last keyframe, and the
 // prediction itself, are each refined against both; the one explaining most of the scan wins.
+// Finishes every candidate by quick ICP against the local model and ranks them by their fit.
+std::vector<std::pair<double, Pose2>> RankCandidates(const std::vector<Pose2>& candidates,
+                                                     const std::vector<Point2>& samples,
+                                                     const ModelIcp& icp,
+                                                     const std::optional<PosePrior>& prior,
+                                                     const ShapeSlamParams& params) {
+  std::vector<std::pair<double, Pose2>> ranked;
+  for (const Pose2& candidate : candidates) {
+    const Pose2 aligned = icp.Align(samples, candidate, kCandidateIcpIterations);
+    if (prior && !WithinPrior(aligned, *prior, params.max_prior_mahalanobis)) continue;
+    ranked.emplace_back(icp.InlierRatio(samples, aligned), aligned);
+  }
+  std::stable_sort(ranked.begin(), ranked.end(),
+                   [](const auto& a, const auto& b) { return a.first > b.first; });
+  return ranked;
+}
+
 Localization Localize(const Shapes& shapes, const LocalModel& model,
                       const std::optional<Pose2>& odometry_delta,
                       const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params) {
@@ -134,25 +157,23 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   const std::vector<Point2> samples =
       AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
   if (samples.empty() || all.empty()) return loc;
-  const internal::SegmentGrid grid(internal::MakeModelSegments(all), params.matcher.inlier_distance_m);
-  double best_ratio = -1.0;
-  for (const Pose2& candidate : candidates) {
-    const RefinementResult refined = RefineAgainstMap(samples, all, candidate, prior, params);
+  const ModelIcp icp(all, params.coarse_gate_m, params.matcher.inlier_distance_m);
+  // The best-fitting candidate gets the one Ceres refinement; should it fail, the next.
+  for (const auto& [ratio, aligned] : RankCandidates(candidates, samples, icp, prior, params)) {
+    const RefinementResult refined =
+        RefineAlignment(samples, all, aligned, prior, params.refinement);
     if (!refined.converged) continue;
     if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
-    const double ratio = InlierRatio(samples, grid, refined.T_map_scan);
-    if (ratio <= best_ratio) continue;
-    best_ratio = ratio;
     loc.correction = refined.T_map_scan;
     loc.covariance = refined.covariance;
     loc.rms_error_m = refined.rms_error_m;
-    loc.inlier_ratio = ratio;
-    loc.trusted = ratio >= params.min_inlier_ratio;
+    loc.inlier_ratio = icp.InlierRatio(samples, refined.T_map_scan);
+    loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
+    break;
   }
   if (!loc.trusted) loc.correction = Pose2();
-  const internal::SegmentGrid near_grid(internal::MakeModelSegments(all),
-                                        params.new_territory_distance_m);
-  loc.coverage = InlierRatio(samples, near_grid, loc.correction);
+  const ModelIcp near(all, params.new_territory_distance_m, params.new_territory_distance_m);
+  loc.coverage = near.InlierRatio(samples, loc.correction);
   return loc;
 }
 

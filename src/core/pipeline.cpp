@@ -65,8 +65,23 @@ Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosure
   return c;
 }
 
+// Farthest valid reading of a scan, metres (0 when it has none).
+double FarthestReading(const LaserScan& scan, const ShapeSlamParams& params) {
+  double farthest = 0.0;
+  for (const double r : scan.ranges_m) {
+    if (std::isfinite(r) && r > params.extraction.min_range_m && r < scan.max_range_m) {
+      farthest = std::max(farthest, r);
+    }
+  }
+  return farthest;
+}
+
+// The visible shape is computed as far as the scan itself reaches (plus a margin), at most
+// max_range_m: what the scan cannot see cannot match it, and the sweep's cost grows with range.
 VisibilityParams VisibilityFor(const LaserScan& scan, bool no_estimate, const ShapeSlamParams& p) {
   VisibilityParams visibility = p.visibility;
+  visibility.max_range_m =
+      std::max(1.0, std::min(visibility.max_range_m, FarthestReading(scan, p) + 1.0));
   visibility.fov_rad =
       no_estimate ? 2.0 * M_PI
                   : std::min(2.0 * M_PI, FieldOfView(scan) + 2.0 * p.visibility_fov_margin_rad);

@@ -8,7 +8,8 @@
 #include <tuple>
 
 #include "shape_slam/geometry.h"
-#include "shape_slam/internal/model_segments.h"
+#include "shape_slam/evaluation.h"
+#include "shape_slam/internal/model_icp.h"
 
 namespace shape_slam {
 namespace {
@@ -55,12 +56,13 @@ Misfit MeasureMisfit(const std::vector<DirectedSample>& samples_scan, double per
                      const Polyline& model, const Pose2& T_model_scan) {
   Misfit misfit;
   if (samples_scan.empty() || model.size() < 2) return misfit;
-  const Eigen::Matrix2d R = T_model_scan.Rotation();
+  const PointTransform transform(T_model_scan);
+  const Eigen::Matrix2d& R = transform.Rotation();
   double sum_d2 = 0.0, sum_a2 = 0.0;
   int overlapping = 0;
   const std::size_t last_segment = model.size() - 2;
   for (const DirectedSample& s : samples_scan) {
-    const PolylineProjection proj = ProjectOntoPolyline(T_model_scan * s.point, model);
+    const PolylineProjection proj = ProjectOntoPolyline(transform(s.point), model);
     const bool at_open_end = (proj.segment == 0 && proj.t <= 0.0) ||
                              (proj.segment == last_segment && proj.t >= 1.0);
     if (at_open_end) continue;
@@ -246,72 +248,27 @@ AlignmentResult AlignMatches(const ShapeMatchInput& input, const std::vector<Gro
   return AlignShapes(pairs, T_model_scan_init, params);
 }
 
-// Rigid transform minimising sum w |T a_i - b_i|^2 (2D Procrustes without scale).
-Pose2 FitRigid(const std::vector<Point2>& a, const std::vector<Point2>& b) {
-  Point2 ca = Point2::Zero(), cb = Point2::Zero();
-  for (std::size_t i = 0; i < a.size(); ++i) ca += a[i], cb += b[i];
-  ca /= static_cast<double>(a.size());
-  cb /= static_cast<double>(b.size());
-  double sxx = 0.0, sxy = 0.0;  // sum of dot and cross products of the centred points
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    const Point2 p = a[i] - ca, q = b[i] - cb;
-    sxx += p.dot(q);
-    sxy += p.x() * q.y() - p.y() * q.x();
-  }
-  const double theta = std::atan2(sxy, sxx);
-  const Pose2 rotation(0.0, 0.0, theta);
-  const Point2 t = cb - rotation * ca;
-  return {t.x(), t.y(), theta};
-}
-
-// Scores an estimate by the fraction of the scan's samples that lie within the inlier distance
-// of any model polyline (a grid over the model keeps each query cheap).
+// Scores estimates by the fraction of the scan's samples near the model, and finishes rough ones
+// by a few ICP steps against the whole model (internal/model_icp.h).
 class FitScorer {
  public:
   FitScorer(const ShapeMatchInput& input, const ShapeMatcherParams& params)
-      : grid_(internal::MakeModelSegments(input.model), params.inlier_distance_m),
-        capture_grid_(internal::MakeModelSegments(input.model),
-                      std::max(params.seed_capture_distance_m, params.inlier_distance_m)),
-        capture_m_(std::max(params.seed_capture_distance_m, params.inlier_distance_m)) {
+      : icp_(input.model, std::max(params.seed_capture_distance_m, params.inlier_distance_m),
+             params.inlier_distance_m) {
     for (const Polyline& polyline : AlignmentPolylines(input)) {
       for (const DirectedSample& s : SampleWithDirections(polyline, kSpacing)) {
         samples_.push_back(s.point);
       }
     }
   }
-
-  double InlierRatio(const Pose2& T_model_scan) const {
-    if (samples_.empty()) return 0.0;
-    int inliers = 0;
-    for (const Point2& p : samples_) inliers += grid_.Nearest(T_model_scan * p).segment >= 0 ? 1 : 0;
-    return static_cast<double>(inliers) / samples_.size();
-  }
-
-  // A few point-to-point ICP steps against the whole model with a shrinking gate: turns a
-  // roughly right seed into a right one before seeds are compared by their fit.
+  double InlierRatio(const Pose2& T_model_scan) const { return icp_.InlierRatio(samples_, T_model_scan); }
   Pose2 QuickAlign(const Pose2& T_model_scan, int iterations) const {
-    Pose2 T = T_model_scan;
-    std::vector<Point2> from, to;
-    for (int k = 0; k < iterations; ++k) {
-      const double gate = capture_m_ * (1.0 - 0.6 * k / std::max(1, iterations - 1));
-      from.clear();
-      to.clear();
-      for (const Point2& p : samples_) {
-        const internal::SegmentMatch m = capture_grid_.Nearest(T * p);
-        if (m.segment < 0 || m.beyond_end || m.squared_distance > gate * gate) continue;
-        from.push_back(p);
-        to.push_back(m.point);
-      }
-      if (from.size() < 3) break;
-      T = FitRigid(from, to);
-    }
-    return T;
+    return icp_.Align(samples_, T_model_scan, iterations);
   }
 
  private:
   static constexpr double kSpacing = 0.2;  // metres
-  internal::SegmentGrid grid_, capture_grid_;
-  double capture_m_;
+  internal::ModelIcp icp_;
   std::vector<Point2> samples_;
 };
 
@@ -512,7 +469,7 @@ AlignmentResult InducedAlignment(const Polyline& perceived, const Polyline& mode
   const std::vector<Point2> a = EqualArcLengthPoints(perceived, kPoints);
   const std::vector<Point2> b = EqualArcLengthPoints(model, kPoints);
   // Rotation from the equal-arc-length fit; translations aligning start, end and centre.
-  const Pose2 fit = FitRigid(a, b);
+  const Pose2 fit = BestRigidAlignment(a, b);
   std::vector<Pose2> initial = {fit};
   for (const int k : {0, kPoints - 1, kPoints / 2}) {
     const Point2 t = b[k] - Pose2(0, 0, fit.theta) * a[k];

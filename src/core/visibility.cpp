@@ -22,7 +22,13 @@ struct Sweep {
   int bins = 0;
   bool full_circle = true;
 
+  std::vector<Point2> edge_dir;    // unit direction of edge k, k in [0, bins]
+  std::vector<Point2> centre_dir;  // unit direction of the centre ray of bin k
+
   double Edge(int k) const { return start + k * width; }
+  // Directions of (possibly wrapped) edge / bin indices, from the tables.
+  const Point2& EdgeDir(int k) const { return edge_dir[k <= bins ? k : k % bins]; }
+  const Point2& CentreDir(int k) const { return centre_dir[k % bins]; }
   // Bearing relative to the start, in [0, 2 pi).
   double Offset(double bearing) const {
     double o = std::fmod(bearing - start, 2.0 * M_PI);
@@ -37,6 +43,13 @@ Sweep MakeSweep(const VisibilityParams& params) {
   s.bins = std::max(1, static_cast<int>(std::ceil(fov / params.angular_resolution_rad)));
   s.width = fov / s.bins;
   s.start = s.full_circle ? -M_PI : -fov / 2.0;
+  s.edge_dir.reserve(s.bins + 1);
+  s.centre_dir.reserve(s.bins);
+  for (int k = 0; k <= s.bins; ++k) s.edge_dir.emplace_back(std::cos(s.Edge(k)), std::sin(s.Edge(k)));
+  for (int k = 0; k < s.bins; ++k) {
+    const double phi = s.Edge(k) + 0.5 * s.width;
+    s.centre_dir.emplace_back(std::cos(phi), std::sin(phi));
+  }
   return s;
 }
 
@@ -46,8 +59,7 @@ struct RayHit {
   double depth;
   double t;
 };
-std::optional<RayHit> Intersect(double phi, const Point2& a, const Point2& b) {
-  const Point2 u(std::cos(phi), std::sin(phi));
+std::optional<RayHit> Intersect(const Point2& u, const Point2& a, const Point2& b) {
   const Point2 d = b - a;
   const double denom = u.x() * d.y() - u.y() * d.x();
   if (std::abs(denom) < 1e-15) return std::nullopt;
@@ -106,8 +118,7 @@ bool AssignBins(const Sweep& sweep, SweptSegment& s) {
 
 // Depth of a segment part in bin k: along the centre ray, or its nearer end if the ray misses.
 double DepthInBin(const Sweep& sweep, const SweptSegment& s, int k) {
-  const double phi = sweep.Edge(k % sweep.bins) + 0.5 * sweep.width;
-  const auto hit = Intersect(phi, s.a, s.b);
+  const auto hit = Intersect(sweep.CentreDir(k), s.a, s.b);
   if (hit && hit->t >= s.t0 && hit->t <= s.t1) return hit->depth;
   const Point2 p0 = s.a + s.t0 * (s.b - s.a), p1 = s.a + s.t1 * (s.b - s.a);
   return std::min(p0.norm(), p1.norm());
@@ -142,8 +153,8 @@ Intervals VisibleIntervals(const Sweep& sweep, const SweptSegment& s,
     const int bin = s.first_bin + j;
     if (DepthInBin(sweep, s, bin) > zbuffer[bin % sweep.bins] + tolerance) continue;
     double t_low = ccw ? s.t0 : s.t1, t_high = ccw ? s.t1 : s.t0;  // t at the lower/upper edge
-    if (const auto hit = Intersect(sweep.Edge(bin), s.a, s.b)) t_low = std::clamp(hit->t, s.t0, s.t1);
-    if (const auto hit = Intersect(sweep.Edge(bin + 1), s.a, s.b)) t_high = std::clamp(hit->t, s.t0, s.t1);
+    if (const auto hit = Intersect(sweep.EdgeDir(bin), s.a, s.b)) t_low = std::clamp(hit->t, s.t0, s.t1);
+    if (const auto hit = Intersect(sweep.EdgeDir(bin + 1), s.a, s.b)) t_high = std::clamp(hit->t, s.t0, s.t1);
     const double ta = std::min(t_low, t_high), tb = std::max(t_low, t_high);
     if (tb <= ta) continue;
     out.emplace_back(ta, tb);
