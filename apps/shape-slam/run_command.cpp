@@ -51,6 +51,7 @@ struct RunOutput {
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
   std::size_t matched = 0, keyframes = 0;
+  int loop_closures = 0;
   double processing_s = 0.0;
 };
 
@@ -70,6 +71,7 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
   }
   progress.Finish();
   out.trajectory = slam.Trajectory();  // corrected by the last pose-graph optimisation
+  out.loop_closures = slam.NumLoopClosures();
   out.processing_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -109,6 +111,7 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("max").Value(out.scan_ms.empty() ? 0.0 : *std::max_element(out.scan_ms.begin(), out.scan_ms.end()));
   json.Key("mean").Value(out.scan_ms.empty() ? 0.0 : sum / out.scan_ms.size()).EndObject();
   json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(out.keyframes);
+  json.Key("loop_closures").Value(out.loop_closures);
   json.Key("odometry").Value(params.use_odometry);
   json.Key("map").BeginObject();
   json.Key("polylines").Value(map.NumPolylines()).Key("vertices").Value(map.NumVertices());

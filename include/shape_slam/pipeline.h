@@ -48,9 +48,9 @@ struct OdometryNoiseParams {
 };
 
 /// Loop closure over a pose graph of keyframes (beyond the paper, which leaves cycle detection
-/// to future work, §7). Every `search_every` keyframes, the nearest older keyframe within
-/// search_radius_m of the estimate, and at least min_travel_m of driving ago, is matched against
-/// the new one (shape matching with and without the estimate as guess, then refinement); an
+/// to future work, §7). Every `search_every` keyframes, the nearest older keyframes within
+/// search_radius_m of the estimate, at least min_travel_m of driving ago and seen from a
+/// similar heading, are matched against the new one (shape matching with and without the estimate as guess, then refinement); an
 /// accepted match adds a loop edge, and when that edge disagrees with the graph the graph is
 /// optimised and the map rebuilt from the keyframes at their corrected poses.
 struct LoopClosureParams {
@@ -58,8 +58,15 @@ struct LoopClosureParams {
   int search_every = 2;             ///< keyframes between loop searches
   double search_radius_m = 4.0;     ///< metres around the estimate
   double min_travel_m = 10.0;       ///< metres driven since the candidate keyframe
+  /// Candidates must have looked within this angle of the current heading (radians).
+  double max_view_angle_rad = 1.2;
+  /// Old keyframes tried per search (spread along the old path), the best match wins.
+  int max_candidates = 3;
   double min_inlier_ratio = 0.6;    ///< of the new scan explained by the old keyframe
   double min_reverse_inlier_ratio = 0.4;  ///< of the old keyframe explained by the new scan
+  /// A match whose position standard deviation (refinement covariance, largest direction)
+  /// exceeds this is degenerate (a corridor along its axis) and closes no loop, metres.
+  double max_match_sigma_m = 0.02;
   /// Edge covariances are the refinement's (which treats samples as independent) times this.
   double covariance_scale = 10.0;
   double sigma_floor_m = 0.02;      ///< edge standard deviation at least, metres
@@ -70,8 +77,10 @@ struct LoopClosureParams {
   double max_correction_rad = 0.5;
   double max_correction_m = 1.0;
   double max_correction_per_m = 0.1;
-  /// A closure that would correct the graph is only used once a second one, within
+  /// A closure whose match explains at least this fraction both ways is used at once; a weaker
+  /// one that would correct the graph is only used once a second one, within
   /// confirm_within_keyframes keyframes, asks for the same correction (within the tolerances).
+  double strong_inlier_ratio = 0.8;
   int confirm_within_keyframes = 10;
   double confirm_tolerance_m = 0.2;
   double confirm_tolerance_rad = 0.05;
@@ -182,14 +191,19 @@ class ShapeSlam {
   Prediction Predict(const LaserScan& scan) const;
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
+  PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
+                               const Pose2& T_map_robot, bool trusted,
+                               const Eigen::Matrix3d& covariance) const;
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
                    const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
   struct LoopEdge {
     PoseGraphEdge edge;
     Pose2 correction;  // what the edge asks of the current keyframe's pose, in its own frame
     int keyframe = 0;  // the keyframe that found it
+    double inlier_ratio = 0.0;
+    double reverse_inlier_ratio = 0.0;
   };
-  std::optional<int> LoopCandidate() const;
+  std::vector<int> LoopCandidates() const;
   std::optional<LoopEdge> MatchLoop(int old_index) const;
   bool SearchLoop();
   void OptimizeAndRebuild();

@@ -18,6 +18,9 @@ namespace {
 // Point-to-point ICP steps that finish each candidate before they are compared.
 constexpr int kCandidateIcpIterations = 8;
 
+// Inlier ratios closer than this count as equally good fits.
+constexpr double kEquallyGoodFit = 0.05;
+
 // DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
 // the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
 Polyline LimitVertices(const Polyline& polyline, int max_vertices) {
@@ -198,14 +201,23 @@ std::optional<KeyframeMatch> MatchKeyframe(const Shapes& scan, const Shapes& key
   const std::vector<Point2> keyframe_samples = AlignmentSamples(keyframe.fine, spacing);
   if (samples.empty() || keyframe_samples.empty()) return std::nullopt;
   const SegmentGrid keyframe_grid(MakeModelSegments(keyframe.fine), params.matcher.inlier_distance_m);
+  // Among fits that explain the scan about equally well, the one nearest the estimate wins:
+  // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
   std::optional<KeyframeMatch> best;
+  double best_distance = 0.0;
   for (const Pose2& candidate : candidates) {
     const RefinementResult refined =
         RefineAgainstMap(samples, keyframe.fine, candidate, std::nullopt, params);
     if (!refined.converged) continue;
     const double ratio = InlierRatio(samples, keyframe_grid, refined.T_map_scan);
-    if (best && ratio <= best->inlier_ratio) continue;
+    const Pose2 d = T_keyframe_scan_estimate.Inverse() * refined.T_map_scan;
+    const double distance = d.Translation().norm() + std::abs(d.theta);  // m + rad
+    const bool better =
+        !best || ratio > best->inlier_ratio + kEquallyGoodFit ||
+        (ratio > best->inlier_ratio - kEquallyGoodFit && distance < best_distance);
+    if (!better) continue;
     best = KeyframeMatch{refined.T_map_scan, refined.covariance, ratio, 0.0};
+    best_distance = distance;
   }
   if (best) {
     const SegmentGrid scan_grid(MakeModelSegments(scan.fine), params.matcher.inlier_distance_m);

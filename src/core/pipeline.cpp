@@ -8,6 +8,7 @@
 
 #include "shape_slam/alignment.h"
 #include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/model_icp.h"
 
 namespace shape_slam {
 namespace {
@@ -133,6 +134,12 @@ void ShapeSlamParams::Validate() const {
 
 void LoopClosureParams::Validate() const {
   if (search_every < 1) throw std::invalid_argument("LoopClosureParams::search_every must be >= 1");
+  if (max_candidates < 1) throw std::invalid_argument("LoopClosureParams::max_candidates must be >= 1");
+  Positive(max_view_angle_rad, "LoopClosureParams::max_view_angle_rad");
+  Positive(max_match_sigma_m, "LoopClosureParams::max_match_sigma_m");
+  if (!(strong_inlier_ratio >= 0.0 && strong_inlier_ratio <= 1.0)) {
+    throw std::invalid_argument("LoopClosureParams::strong_inlier_ratio must be in [0, 1]");
+  }
   Positive(search_radius_m, "LoopClosureParams::search_radius_m");
   NonNegative(min_travel_m, "LoopClosureParams::min_travel_m");
   Positive(covariance_scale, "LoopClosureParams::covariance_scale");
@@ -184,37 +191,75 @@ bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
 
 Pose2 ShapeSlam::KeyframePose(int keyframe) const { return graph_.Node(keyframes_[keyframe].node); }
 
-// A new pose-graph node, tied to the previous keyframe by the front end's relative estimate.
+// The consecutive edge: the scan aligned to the previous keyframe alone, not to the map, so that
+// a pose corrected against older parts of the map enters the graph as a loop closure (found by
+// SearchLoop) rather than as a jump in the odometry chain.
+PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
+                                        const Pose2& T_map_robot, bool trusted,
+                                        const Eigen::Matrix3d& covariance) const {
+  const int previous = static_cast<int>(keyframes_.size()) - 1;
+  const Keyframe& prev = keyframes_[previous];
+  PoseGraphEdge edge;
+  edge.from = prev.node;
+  edge.T_from_to = KeyframePose(previous).Inverse() * T_map_robot;
+  // An unconfirmed step (odometry or nothing) is a weak constraint.
+  edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
+                            : Eigen::Matrix3d(Eigen::Vector3d(0.09, 0.09, 0.01).asDiagonal());
+  const std::vector<Point2> samples =
+      internal::AlignmentSamples(fine, params_.matcher.alignment.sample_spacing_m);
+  if (samples.empty() || prev.fine.empty()) return edge;
+  const Pose2 estimate = prev.scan.T_robot_sensor.Inverse() * edge.T_from_to * scan.T_robot_sensor;
+  const RefinementResult local =
+      RefineAlignment(samples, prev.fine, estimate, std::nullopt, params_.refinement);
+  const internal::ModelIcp check(prev.fine, params_.matcher.inlier_distance_m,
+                                 params_.matcher.inlier_distance_m);
+  if (local.converged && check.InlierRatio(samples, local.T_map_scan) >= params_.min_inlier_ratio) {
+    edge.T_from_to = prev.scan.T_robot_sensor * local.T_map_scan * scan.T_robot_sensor.Inverse();
+    edge.covariance = EdgeCovariance(local.covariance, params_.loop_closure);
+  }
+  return edge;
+}
+
+// A new pose-graph node, tied to the previous keyframe.
 void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
                             std::vector<Polyline> fine, const Pose2& T_map_robot, bool trusted,
                             const Eigen::Matrix3d& covariance) {
+  std::optional<PoseGraphEdge> edge;
+  if (!keyframes_.empty()) edge = SequentialEdge(fine, scan, T_map_robot, trusted, covariance);
   const int node = graph_.AddNode(T_map_robot);
-  if (!keyframes_.empty()) {
-    PoseGraphEdge edge;
-    edge.from = keyframes_.back().node;
-    edge.to = node;
-    edge.T_from_to = KeyframePose(static_cast<int>(keyframes_.size()) - 1).Inverse() * T_map_robot;
-    // An unconfirmed step (odometry or nothing) is a weak constraint.
-    const Eigen::Matrix3d weak = Eigen::Vector3d(0.3 * 0.3, 0.3 * 0.3, 0.1 * 0.1).asDiagonal();
-    edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure) : weak;
-    graph_.AddEdge(edge);
+  if (edge) {
+    edge->to = node;
+    graph_.AddEdge(*edge);
   }
   keyframes_.push_back({node, scan, std::move(coarse), std::move(fine), travel_m_, trusted});
 }
 
-// The nearest keyframe within the search radius that lies far enough back along the path.
-std::optional<int> ShapeSlam::LoopCandidate() const {
+// Keyframes within the search radius that lie far enough back along the path and looked the
+// same way (a view from the opposite direction shares little with a 180 deg scanner's),
+// nearest first by distance plus heading difference (1 rad counted as 2 m).
+std::vector<int> ShapeSlam::LoopCandidates() const {
   const LoopClosureParams& p = params_.loop_closure;
   const int current = static_cast<int>(keyframes_.size()) - 1;
   const Pose2 P_now = KeyframePose(current);
-  std::optional<int> best;
-  double best_distance = p.search_radius_m;
+  std::vector<std::pair<double, int>> scored;
   for (int k = 0; k < current; ++k) {
     if (keyframes_[current].travel_m - keyframes_[k].travel_m < p.min_travel_m) break;  // in order
-    const double d = (KeyframePose(k).Translation() - P_now.Translation()).norm();
-    if (d <= best_distance) best_distance = d, best = k;
+    const Pose2 P = KeyframePose(k);
+    const double d = (P.Translation() - P_now.Translation()).norm();
+    const double turn = std::abs(NormalizeAngle(P.theta - P_now.theta));
+    if (d <= p.search_radius_m && turn <= p.max_view_angle_rad) scored.emplace_back(d + 2.0 * turn, k);
   }
-  return best;
+  std::sort(scored.begin(), scored.end());
+  std::vector<int> candidates;
+  for (const auto& [score, k] : scored) {
+    // Neighbouring keyframes see nearly the same: spread the tries along the old path.
+    const bool near_tried = std::any_of(candidates.begin(), candidates.end(), [&](int c) {
+      return std::abs(keyframes_[c].travel_m - keyframes_[k].travel_m) < 2.0;
+    });
+    if (!near_tried) candidates.push_back(k);
+    if (static_cast<int>(candidates.size()) >= p.max_candidates) break;
+  }
+  return candidates;
 }
 
 // Matches the newest keyframe against an old one; the loop edge when the match is good and its
@@ -233,11 +278,17 @@ std::optional<ShapeSlam::LoopEdge> ShapeSlam::MatchLoop(int old_index) const {
       m->reverse_inlier_ratio < p.min_reverse_inlier_ratio) {
     return std::nullopt;
   }
+  // A match that leaves a direction unconstrained (a straight corridor along its axis) cannot
+  // tell where along it the robot is: no closure from it.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(m->covariance.topLeftCorner<2, 2>());
+  if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > p.max_match_sigma_m) return std::nullopt;
   LoopEdge loop;
   loop.edge = {old.node, now.node,
                old.scan.T_robot_sensor * m->T_keyframe_scan * now.scan.T_robot_sensor.Inverse(),
                EdgeCovariance(m->covariance, p), true};
   loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
+  loop.inlier_ratio = m->inlier_ratio;
+  loop.reverse_inlier_ratio = m->reverse_inlier_ratio;
   loop.keyframe = current;
   const double travelled = now.travel_m - old.travel_m;
   if (std::abs(loop.correction.theta) > p.max_correction_rad ||
@@ -256,15 +307,23 @@ bool ShapeSlam::SearchLoop() {
   const LoopClosureParams& p = params_.loop_closure;
   const int current = static_cast<int>(keyframes_.size()) - 1;
   if (!p.enabled || current % p.search_every != 0) return false;
-  const std::optional<int> old = LoopCandidate();
-  if (!old) return false;
-  const std::optional<LoopEdge> loop = MatchLoop(*old);
+  std::optional<LoopEdge> loop;
+  for (const int old : LoopCandidates()) {
+    std::optional<LoopEdge> candidate = MatchLoop(old);
+    if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = candidate;
+  }
   if (!loop) return false;
   const Pose2& c = loop->correction;
   if (c.Translation().norm() <= p.min_correction_m && std::abs(c.theta) <= p.min_correction_rad) {
     graph_.AddEdge(loop->edge);
     ++num_loop_closures_;
     return false;
+  }
+  if (loop->inlier_ratio >= p.strong_inlier_ratio && loop->reverse_inlier_ratio >= p.strong_inlier_ratio) {
+    graph_.AddEdge(loop->edge);  // a strong match needs no confirmation
+    ++num_loop_closures_;
+    pending_loop_.reset();
+    return true;
   }
   const bool confirmed =
       pending_loop_ && current - pending_loop_->keyframe <= p.confirm_within_keyframes &&

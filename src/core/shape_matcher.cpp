@@ -159,7 +159,7 @@ class PairEvaluator {
   // group's bounding box.
   bool BoxesMeet(const Group& scan, const Group& model, const Pose2& T, double margin) const {
     Point2 lo = Point2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-    for (const Point2 corner : {scan.min, scan.max, Point2(scan.min.x(), scan.max.y()),
+    for (const Point2& corner : {scan.min, scan.max, Point2(scan.min.x(), scan.max.y()),
                                 Point2(scan.max.x(), scan.min.y())}) {
       const Point2 q = T * corner;
       lo = lo.cwiseMin(q);

@@ -117,11 +117,21 @@ bool AssignBins(const Sweep& sweep, SweptSegment& s) {
 }
 
 // Depth of a segment part in bin k: along the centre ray, or its nearer end if the ray misses.
-double DepthInBin(const Sweep& sweep, const SweptSegment& s, int k) {
-  const auto hit = Intersect(sweep.CentreDir(k), s.a, s.b);
-  if (hit && hit->t >= s.t0 && hit->t <= s.t1) return hit->depth;
-  const Point2 p0 = s.a + s.t0 * (s.b - s.a), p1 = s.a + s.t1 * (s.b - s.a);
-  return std::min(p0.norm(), p1.norm());
+// The part [ta, tb] of a segment that lies between the edge rays of bin k.
+std::pair<double, double> PartInBin(const Sweep& sweep, const SweptSegment& s, int k) {
+  const Point2 d = s.b - s.a;
+  const bool ccw = s.a.x() * d.y() - s.a.y() * d.x() > 0.0;  // bearing grows with t
+  double t_low = ccw ? s.t0 : s.t1, t_high = ccw ? s.t1 : s.t0;  // t at the lower/upper edge
+  if (const auto hit = Intersect(sweep.EdgeDir(k), s.a, s.b)) t_low = std::clamp(hit->t, s.t0, s.t1);
+  if (const auto hit = Intersect(sweep.EdgeDir(k + 1), s.a, s.b)) t_high = std::clamp(hit->t, s.t0, s.t1);
+  return {std::min(t_low, t_high), std::max(t_low, t_high)};
+}
+
+// Depth of a segment in bin k: the distance of its nearest point within the bin. (Along the
+// centre ray alone, a polyline would hide its own continuation at a corner sharing the bin.)
+double DepthOfPart(const SweptSegment& s, const std::pair<double, double>& part) {
+  const Point2 p0 = s.a + part.first * (s.b - s.a), p1 = s.a + part.second * (s.b - s.a);
+  return std::sqrt(SquaredDistanceToSegment(Point2::Zero(), p0, p1));
 }
 
 std::vector<SweptSegment> GatherSegments(
@@ -146,18 +156,13 @@ using Intervals = std::vector<std::pair<double, double>>;
 
 Intervals VisibleIntervals(const Sweep& sweep, const SweptSegment& s,
                            const std::vector<double>& zbuffer, double tolerance) {
-  const Point2 d = s.b - s.a;
-  const bool ccw = s.a.x() * d.y() - s.a.y() * d.x() > 0.0;  // bearing grows with t
   Intervals out;
   for (int j = 0; j < s.num_bins; ++j) {
     const int bin = s.first_bin + j;
-    if (DepthInBin(sweep, s, bin) > zbuffer[bin % sweep.bins] + tolerance) continue;
-    double t_low = ccw ? s.t0 : s.t1, t_high = ccw ? s.t1 : s.t0;  // t at the lower/upper edge
-    if (const auto hit = Intersect(sweep.EdgeDir(bin), s.a, s.b)) t_low = std::clamp(hit->t, s.t0, s.t1);
-    if (const auto hit = Intersect(sweep.EdgeDir(bin + 1), s.a, s.b)) t_high = std::clamp(hit->t, s.t0, s.t1);
-    const double ta = std::min(t_low, t_high), tb = std::max(t_low, t_high);
-    if (tb <= ta) continue;
-    out.emplace_back(ta, tb);
+    const std::pair<double, double> part = PartInBin(sweep, s, bin);
+    if (part.second <= part.first) continue;
+    if (DepthOfPart(s, part) > zbuffer[bin % sweep.bins] + tolerance) continue;
+    out.push_back(part);
   }
   std::sort(out.begin(), out.end());
   Intervals merged;
@@ -176,7 +181,8 @@ std::vector<double> BuildZBuffer(const Sweep& sweep, const std::vector<SweptSegm
   for (const SweptSegment& s : segments) {
     for (int j = 0; j < s.num_bins; ++j) {
       double& z = zbuffer[(s.first_bin + j) % sweep.bins];
-      z = std::min(z, DepthInBin(sweep, s, s.first_bin + j));
+      const std::pair<double, double> part = PartInBin(sweep, s, s.first_bin + j);
+      if (part.second > part.first) z = std::min(z, DepthOfPart(s, part));
     }
   }
   return zbuffer;

@@ -1,0 +1,107 @@
+#include "shape_slam/visibility.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+
+namespace shape_slam {
+namespace {
+
+struct MapFixture {
+  std::unordered_map<PolylineId, Polyline> polylines;
+  SegmentIndex index{2.0};
+  void Add(PolylineId id, const Polyline& p) {
+    polylines[id] = p;
+    index.Insert(id, p);
+  }
+  std::vector<VisiblePolyline> See(const Pose2& T, VisibilityParams params = {}) const {
+    return ComputeVisibleShape(polylines, index, T, params);
+  }
+};
+
+double Bearing(const Point2& p) { return std::atan2(p.y(), p.x()); }
+
+TEST(VisibilityTest, WallBehindAWallIsCutAtTheShadowRays) {
+  MapFixture map;
+  map.Add(0, {{2, -1}, {2, 1}});    // near wall, x = 2, y in [-1, 1]
+  map.Add(1, {{4, -4}, {4, 4}});    // far wall, x = 4: hidden for |y| < 2
+  const std::vector<VisiblePolyline> v = map.See(Pose2());
+  ASSERT_EQ(v.size(), 3u);  // far wall below, near wall, far wall above (CCW)
+  EXPECT_EQ(v[0].source, 1u);
+  EXPECT_EQ(v[1].source, 0u);
+  EXPECT_EQ(v[2].source, 1u);
+  // The shadow edges are at y = +-2 on the far wall, up to one sweep bin (0.25 deg at ~4.5 m).
+  const double bin = 4.5 * 0.25 * M_PI / 180;
+  EXPECT_NEAR(v[0].points_sensor.back().y(), -2.0, 2 * bin);
+  EXPECT_NEAR(v[2].points_sensor.front().y(), 2.0, 2 * bin);
+  EXPECT_NEAR(v[0].points_sensor.front().y(), -4.0, 1e-9);
+  // Source intervals on the far wall (arc length from (4, -4)).
+  EXPECT_NEAR(v[0].source_from_m, 0.0, 1e-9);
+  EXPECT_NEAR(v[0].source_to_m, 2.0, 2 * bin);
+  EXPECT_NEAR(v[2].source_to_m, 8.0, 1e-9);
+  for (const VisiblePolyline& p : v) {  // counter-clockwise along each piece
+    EXPECT_LT(Bearing(p.points_sensor.front()), Bearing(p.points_sensor.back()));
+  }
+}
+
+TEST(VisibilityTest, ClipsAtTheRangeCircleAndTheFieldOfView) {
+  MapFixture map;
+  map.Add(0, {{5, -20}, {5, 20}});
+  VisibilityParams params;
+  params.max_range_m = 10.0;
+  params.fov_rad = M_PI;
+  std::vector<VisiblePolyline> v = map.See(Pose2(), params);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NEAR(v[0].points_sensor.front().norm(), 10.0, 1e-9);
+  EXPECT_NEAR(v[0].points_sensor.back().norm(), 10.0, 1e-9);
+  params.fov_rad = M_PI / 2;  // +-45 deg: the wall is cut at y = +-5, exactly at the edge rays
+  v = map.See(Pose2(), params);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_NEAR(v[0].points_sensor.front().y(), -5.0, 1e-9);
+  EXPECT_NEAR(v[0].points_sensor.back().y(), 5.0, 1e-9);
+}
+
+TEST(VisibilityTest, RoomSeenFromInsideIsOrderedCounterClockwise) {
+  MapFixture map;
+  map.Add(3, {{0, 0}, {6, 0}, {6, 4}, {0, 4}, {0, 0}});  // one closed polyline
+  const Pose2 T_map_sensor(2.0, 1.5, 0.4);
+  const std::vector<VisiblePolyline> v = map.See(T_map_sensor);
+  ASSERT_GE(v.size(), 1u);
+  ASSERT_LE(v.size(), 2u);  // the wrap at bearing -pi may split it once
+  double total = 0.0;
+  for (const VisiblePolyline& p : v) {
+    for (std::size_t i = 0; i + 1 < p.points_sensor.size(); ++i) {
+      total += NormalizeAngle(Bearing(p.points_sensor[i + 1]) - Bearing(p.points_sensor[i]));
+      total += (p.points_sensor[i + 1] - p.points_sensor[i]).norm() * 0.0;
+    }
+  }
+  EXPECT_NEAR(total, 2 * M_PI, 0.02);  // the whole room, once around
+  // Outputs are in the sensor frame: map them back onto the walls.
+  for (const VisiblePolyline& p : v) {
+    for (const Point2& q : p.points_sensor) {
+      const Point2 w = T_map_sensor * q;
+      const double d = std::min({std::abs(w.x()), std::abs(w.x() - 6), std::abs(w.y()), std::abs(w.y() - 4)});
+      EXPECT_LT(d, 1e-9);
+    }
+  }
+}
+
+TEST(VisibilityTest, DegenerateInputAndDeterminism) {
+  MapFixture map;
+  map.Add(0, {{1, 1}, {1, 1}, {2, 1}});  // zero-length segment
+  map.Add(1, {{-1, 0}, {1, 0}});         // through the viewpoint
+  map.Add(2, {{3, 3}});                  // one vertex
+  const std::vector<VisiblePolyline> a = map.See(Pose2());
+  const std::vector<VisiblePolyline> b = map.See(Pose2());
+  ASSERT_EQ(a.size(), b.size());
+  for (std::size_t i = 0; i < a.size(); ++i) EXPECT_EQ(a[i].points_sensor, b[i].points_sensor);
+  MapFixture empty;
+  EXPECT_TRUE(empty.See(Pose2()).empty());
+  VisibilityParams bad;
+  bad.max_range_m = -1;
+  EXPECT_THROW(empty.See(Pose2(), bad), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shape_slam
