@@ -13,5 +13,7 @@ using Args = std::vector<std::string>;
 int RunExtract(const Args& args);
 int RunRun(const Args& args);
 int RunEval(const Args& args);
+int RunMatch(const Args& args);
+int RunConvert(const Args& args);
 
 }  // namespace shape_slam::app

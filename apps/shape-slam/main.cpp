@@ -20,7 +20,10 @@ const Command kCommands[] = {
     {"run", shape_slam::app::RunRun, "build a polyline map from a log (the main job)"},
     {"extract", shape_slam::app::RunExtract,
      "polylines of one scan before and after Discrete Curve Evolution"},
+    {"match", shape_slam::app::RunMatch,
+     "pose of one scan in the frame of another, by shape, with no guess needed"},
     {"eval", shape_slam::app::RunEval, "ATE and relation errors against reference poses"},
+    {"convert", shape_slam::app::RunConvert, "CARMEN log to an MRPT rawlog"},
 };
 
 void PrintHelp(std::ostream& out) {

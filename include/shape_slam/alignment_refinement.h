@@ -22,7 +22,8 @@
 //    (DENSE_SVD) against about 10 us here, and on a rank-deficient problem (a corridor of
 //    straight walls) it fails and logs an error through glog, which the library must not. It
 //    assumes independent samples with standard deviation point_sigma_m, hence is optimistic when
-//    the samples' errors are correlated (a polyline approximating a curved wall). Directions the
+//    the samples' errors are correlated (a polyline approximating a curved wall, or fine
+//    polylines whose small kinks follow the range noise). Directions the
 //    data do not constrain get the variance kUnconstrainedVariance (the information's
 //    eigenvalues are floored at its inverse), so the result is always finite, symmetric and
 //    positive definite.

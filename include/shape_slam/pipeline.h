@@ -130,6 +130,12 @@ struct ShapeSlamParams {
   double min_inlier_ratio = 0.30;
   /// Cell size of the map's spatial index, metres.
   double index_cell_size_m = 2.0;
+  /// Scan-to-scan registration without a guess (scan_matcher.h: `shape-slam match`, the MRPT
+  /// aligner): there one match decides everything and no map backs it up, so §4.3 tries more
+  /// of the most reliable pairs than per-scan tracking does (matcher.max_seed_pairs and
+  /// matcher.num_seeds): about twice the time, markedly fewer wrong seeds.
+  int scan_match_seed_pairs = 25;
+  int scan_match_seeds = 6;
 
   void Validate() const;
 };

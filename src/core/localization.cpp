@@ -37,20 +37,6 @@ bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma
   return e.dot(prior.covariance.ldlt().solve(e)) <= max_sigma * max_sigma;
 }
 
-// Refines an estimate against every visible map polyline: with a wide gate first (odometry-size
-// errors), then with the configured one.
-RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
-                                  const std::vector<Polyline>& model, const Pose2& init,
-                                  const std::optional<PosePrior>& prior,
-                                  const ShapeSlamParams& params) {
-  RefinementParams coarse = params.refinement;
-  coarse.max_correspondence_distance_m =
-      std::max(params.coarse_gate_m, params.refinement.max_correspondence_distance_m);
-  coarse.loss_scale_m = std::max(coarse.loss_scale_m, params.coarse_gate_m / 4.0);
-  const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
-  return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
-}
-
 // Shape matching (§4.2, §4.3) of the scan against one model; its alignment is a candidate.
 std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Polyline>& model,
                                     bool model_cyclic, const std::optional<Pose2>& guess,
@@ -106,6 +92,18 @@ std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double s
     samples.insert(samples.end(), s.begin(), s.end());
   }
   return samples;
+}
+
+RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
+                                  const std::vector<Polyline>& model, const Pose2& init,
+                                  const std::optional<PosePrior>& prior,
+                                  const ShapeSlamParams& params) {
+  RefinementParams coarse = params.refinement;
+  coarse.max_correspondence_distance_m =
+      std::max(params.coarse_gate_m, params.refinement.max_correspondence_distance_m);
+  coarse.loss_scale_m = std::max(coarse.loss_scale_m, params.coarse_gate_m / 4.0);
+  const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
+  return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
 }
 
 // Fraction of the samples within the grid's radius of the model at an estimate.

@@ -130,6 +130,10 @@ void ShapeSlamParams::Validate() const {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
   Positive(max_prior_mahalanobis, "ShapeSlamParams::max_prior_mahalanobis");
+  if (scan_match_seed_pairs < 1 || scan_match_seeds < 1) {
+    throw std::invalid_argument(
+        "ShapeSlamParams::scan_match_seed_pairs and scan_match_seeds must be >= 1");
+  }
 }
 
 void LoopClosureParams::Validate() const {

@@ -41,6 +41,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "max_untrusted_coverage", "an unconfirmed scan updates the map only if less than this fraction of it is near the map", &p.max_untrusted_coverage},
       {"pipeline", "new_territory_distance_m", "'near the map' distance of that rule (m)", &p.new_territory_distance_m},
       {"pipeline", "min_inlier_ratio", "a match is trusted when this fraction of the scan lies on the map after it", &p.min_inlier_ratio},
+      {"scan_match", "seed_pairs", "scan-to-scan matching without a guess (shape-slam match): most reliable pairs tried", &p.scan_match_seed_pairs},
+      {"scan_match", "seeds", "... of which this many go through the second pass", &p.scan_match_seeds},
       {"pipeline", "coarse_gate_m", "the refinement against the whole visible map starts with this wider gate (m)", &p.coarse_gate_m},
       {"pipeline", "index_cell_size_m", "cell size of the map's spatial index (m)", &p.index_cell_size_m},
       {"visibility", "max_range_m", "map polylines farther than this from the sensor are not visible (m)", &p.visibility.max_range_m},

@@ -31,6 +31,13 @@ std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double s
 /// Covariance of an odometry increment T_prev_cur under the noise model.
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
 
+/// Refines an estimate against every model polyline: with a wide gate first (coarse_gate_m, for
+/// odometry-size errors), then with the configured one.
+RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
+                                  const std::vector<Polyline>& model, const Pose2& init,
+                                  const std::optional<PosePrior>& prior,
+                                  const ShapeSlamParams& params);
+
 /// Fraction of the samples within the grid's radius of the model at an estimate.
 double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
                    const Pose2& T_model_scan);

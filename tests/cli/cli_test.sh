@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Command-line tests of shape-slam: every command's help, the main jobs on small real logs, and
+# bad input (clear message naming the problem, non-zero exit, no crash, nothing lost).
+# Usage: cli_test.sh SHAPE_SLAM_BINARY TEST_DATA_DIR
+set -uo pipefail
+BIN=$1
+DATA=$2
+SENA="/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
+WORK=$(mktemp -d)
+trap 'rm -rf "$WORK"' EXIT
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+
+# expect CODE PATTERN -- command...: exit code CODE and PATTERN (grep -E) in stdout+stderr.
+expect() {
+  local code=$1 pattern=$2
+  shift 3
+  local out rc
+  out=$("$@" 2>&1)
+  rc=$?
+  if [ "$rc" -ne "$code" ]; then
+    fail "'$*' exited $rc, expected $code; output: ${out:0:400}"
+  elif ! grep -Eiq -- "$pattern" <<<"$out"; then
+    fail "'$*' output lacks /$pattern/: ${out:0:400}"
+  fi
+  if [ "$rc" -ge 128 ]; then fail "'$*' crashed (signal $((rc - 128)))"; fi
+}
+
+# Help everywhere.
+expect 0 "Commands:" -- "$BIN" --help
+for cmd in run extract match eval convert; do
+  expect 0 "Usage: shape-slam $cmd" -- "$BIN" "$cmd" --help
+done
+expect 2 "unknown command" -- "$BIN" frobnicate
+expect 2 "Usage" -- "$BIN"
+
+# extract and match on a small CARMEN log.
+LOG="$DATA/logs/intel_head.log"
+expect 0 '"polylines"' -- "$BIN" extract "$LOG" --scan 1 --json
+expect 0 '^-?[0-9.e-]+ -?[0-9.e-]+ -?[0-9.e-]+$' -- "$BIN" match "$LOG" --scan 0 --to 1
+expect 0 '"T_i_j":\[' -- "$BIN" match "$LOG" --scan 0 --to 1 --json --guess 0.1 0 0.05
+expect 1 "scan 99 does not exist" -- "$BIN" match "$LOG" --scan 0 --to 99
+expect 2 "required" -- "$BIN" match "$LOG" --scan 0
+expect 2 "--guess" -- "$BIN" match "$LOG" --scan 0 --to 1 --guess 1 nan 0
+
+# convert, then map the converted rawlog; evaluate the run against itself (ATE 0).
+expect 0 "laser scans" -- "$BIN" convert "$LOG" "$WORK/head.rawlog"
+expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/head" --quiet
+for f in trajectory.tum map.polylines map.svg map.png stats.json; do
+  [ -s "$WORK/head/$f" ] || fail "run did not write $f"
+done
+expect 0 "ATE \(RMSE\) +0\.0+ m" -- "$BIN" eval "$WORK/head/trajectory.tum" "$WORK/head/trajectory.tum"
+
+# The demo: the MRPT sample log, default output names, a sane map.
+if [ -f "$SENA" ]; then
+  expect 0 "" -- "$BIN" run "$SENA" --out "$WORK/sena" --quiet --no-odometry --max-scans 40
+  python3 - "$WORK/sena/stats.json" <<'PY' || fail "stats.json of the sample log is not sane"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["scans"] == 40, d
+assert d["map"]["polylines"] > 10 and d["map"]["vertices"] >= 2 * d["map"]["polylines"], d
+assert 0 < d["per_scan_ms"]["median"] <= d["per_scan_ms"]["max"], d
+PY
+fi
+
+# Bad input: wrong paths, directories, empty files, garbage, truncated gzip, bad ini.
+expect 1 "cannot open|No such file|does not exist" -- "$BIN" run "$WORK/missing.log" --out "$WORK/o"
+expect 1 "directory" -- "$BIN" run "$WORK" --out "$WORK/o"
+: >"$WORK/empty.log"
+expect 1 "empty" -- "$BIN" run "$WORK/empty.log" --out "$WORK/o"
+head -c 3000 /dev/urandom >"$WORK/garbage.log"
+expect 1 "error" -- "$BIN" run "$WORK/garbage.log" --out "$WORK/o"
+gzip -c "$LOG" | head -c 600 >"$WORK/truncated.log.gz"
+expect 1 "truncated|corrupt|gzip" -- "$BIN" extract "$WORK/truncated.log.gz" --scan 3
+printf '[matcher]\nno_such_key = 1\n' >"$WORK/bad-key.ini"
+expect 1 "no_such_key" -- "$BIN" run "$LOG" --config "$WORK/bad-key.ini" --out "$WORK/o"
+printf '[matcher]\nskip_penalty_per_m = abc\n' >"$WORK/bad-value.ini"
+expect 1 "skip_penalty_per_m" -- "$BIN" run "$LOG" --config "$WORK/bad-value.ini" --out "$WORK/o"
+# NaN, inf and negative ranges are "no reading": the run completes and counts them.
+sed -e '0,/^FLASER/s/^FLASER \([0-9]*\) [^ ]* [^ ]* [^ ]*/FLASER \1 nan inf -1/' "$LOG" >"$WORK/nan.log"
+expect 0 "" -- "$BIN" run "$WORK/nan.log" --out "$WORK/nan" --quiet
+grep -q '"invalid_ranges": *3' "$WORK/nan/stats.json" || fail "invalid ranges not counted: $(cat "$WORK/nan/stats.json")"
+# A scan with no valid reading at all: mapped as nothing, no crash.
+awk '/^FLASER/ && !done {n=$2; printf "FLASER %d", n; for (i=0;i<n;i++) printf " nan"; for (i=n+3;i<=NF;i++) printf " %s", $i; print ""; done=1; next} {print}' "$LOG" >"$WORK/noscan.log"
+expect 0 "" -- "$BIN" run "$WORK/noscan.log" --out "$WORK/noscan" --quiet
+
+# A failed run leaves earlier results in the output directory untouched.
+mkdir -p "$WORK/keep"
+echo "precious" >"$WORK/keep/trajectory.tum"
+expect 1 "no_such_key" -- "$BIN" run "$LOG" --config "$WORK/bad-key.ini" --out "$WORK/keep"
+[ "$(cat "$WORK/keep/trajectory.tum")" = "precious" ] || fail "a failed run overwrote trajectory.tum"
+[ -z "$(find "$WORK/keep" -name '*.tmp*')" ] || fail "temporary files left behind"
+
+if [ "$failures" -ne 0 ]; then
+  echo "$failures CLI check(s) failed"
+  exit 1
+fi
+echo "all CLI checks passed"
