@@ -1,13 +1,14 @@
 #!/usr/bin/env bash
 # The demo (README, first command): installs what is missing, builds (Release) and runs
-# ShapeSLAM's main job on the MRPT sample log that the Debian package mrpt-common installs.
-# Arguments are passed on to the shape-slam tool.
+# ShapeSLAM's main job, `shape-slam run`, on the MRPT sample log that the Debian package
+# mrpt-common installs (the tool's default log). Outputs go to ./shape-slam-out (trajectory,
+# map.polylines, map.svg, map.png, stats.json). Arguments replace the default `run`, e.g.
+#   bash scripts/demo.sh run datasets/radish/intel.log.gz --out intel-out
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh
 bash scripts/build.sh --target shape-slam
-DEFAULT_LOG="/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
 if [ $# -eq 0 ]; then
-  set -- extract "$DEFAULT_LOG" --scan 100 --svg shape-slam-extract.svg
+  set -- run
 fi
 "${BUILD_DIR:-build}/apps/shape-slam" "$@"

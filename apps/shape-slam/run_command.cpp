@@ -36,6 +36,7 @@ ArgParser MakeParser() {
       .Flag("--no-odometry", "ignore the log's odometry: match by shape alone (paper §4.3)")
       .Option("--max-scans", {"N"}, "process only the first N laser scans")
       .Flag("--quiet", "no progress bar and no summary")
+      .Flag("--print-config", "print the parameters in ini form (defaults, or --config's) and exit")
       .Flag("--strict", "fail on the first malformed log record instead of skipping it")
       .Epilog(
           "Outputs (written atomically into DIR, only after a successful run):\n"
@@ -156,6 +157,10 @@ int RunRun(const Args& args) {
   const auto wall_start = std::chrono::steady_clock::now();
   ShapeSlamParams params = LoadParamsForApp(parser.GetOptional("--config"));
   if (parser.Has("--no-odometry")) params.use_odometry = false;
+  if (parser.Has("--print-config")) {
+    std::cout << io::FormatParamsIni(params);
+    return 0;
+  }
   const std::string log = parser.GetOptional("LOG").value_or(kDefaultLog);
   const std::string out_dir = parser.GetOptional("--out").value_or("shape-slam-out");
   const bool quiet = parser.Has("--quiet");

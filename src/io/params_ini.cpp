@@ -41,8 +41,6 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "max_untrusted_coverage", "an unconfirmed scan updates the map only if less than this fraction of it is near the map", &p.max_untrusted_coverage},
       {"pipeline", "new_territory_distance_m", "'near the map' distance of that rule (m)", &p.new_territory_distance_m},
       {"pipeline", "min_inlier_ratio", "a match is trusted when this fraction of the scan lies on the map after it", &p.min_inlier_ratio},
-      {"scan_match", "seed_pairs", "scan-to-scan matching without a guess (shape-slam match): most reliable pairs tried", &p.scan_match_seed_pairs},
-      {"scan_match", "seeds", "... of which this many go through the second pass", &p.scan_match_seeds},
       {"pipeline", "coarse_gate_m", "the refinement against the whole visible map starts with this wider gate (m)", &p.coarse_gate_m},
       {"pipeline", "index_cell_size_m", "cell size of the map's spatial index (m)", &p.index_cell_size_m},
       {"visibility", "max_range_m", "map polylines farther than this from the sensor are not visible (m)", &p.visibility.max_range_m},
@@ -129,6 +127,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"odometry_noise", "sigma_theta_rad", "odometry prior: heading standard deviation floor (rad)", &p.odometry_noise.sigma_theta_rad},
       {"odometry_noise", "sigma_theta_per_rad", "... plus this per radian turned", &p.odometry_noise.sigma_theta_per_rad},
       {"odometry_noise", "sigma_theta_per_m", "... plus this per metre travelled", &p.odometry_noise.sigma_theta_per_m},
+      {"scan_match", "seed_pairs", "scan-to-scan matching without a guess (shape-slam match): most reliable pairs tried", &p.scan_match_seed_pairs},
+      {"scan_match", "seeds", "... of which this many go through the second pass", &p.scan_match_seeds},
   };
 }
 
@@ -206,8 +206,10 @@ ShapeSlamParams ParseParamsIni(const std::string& text, const std::string& name,
     }
     const std::size_t eq = content.find('=');
     if (eq == std::string::npos) throw ConfigError(where + ": expected 'key = value', found '" + content + "'");
-    if (section.empty()) throw ConfigError(where + ": key outside of any [section]");
     const std::string key = Trim(content.substr(0, eq)), value = Trim(content.substr(eq + 1));
+    if (section.empty()) {
+      throw ConfigError(where + ": key '" + key + "' outside of any [section]");
+    }
     const std::string full = section + "." + key;
     const Field* field = nullptr;
     for (const Field& f : fields) {
