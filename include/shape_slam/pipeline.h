@@ -119,6 +119,12 @@ struct ShapeSlamParams {
   bool use_last_keyframe = true;
   /// Use the log's odometry to predict poses; when false (or the log has none) §4.3 applies.
   bool use_odometry = true;
+  /// Without odometry: the largest motion between consecutive scans that an estimate may
+  /// imply (metres, radians). Shape matching without a guess can find look-alike places
+  /// anywhere in view (the other side of a symmetric block, a parallel corridor); no robot
+  /// jumps there between two scans. Generous on purpose: logs scanned every second or two.
+  double max_motion_per_scan_m = 1.5;
+  double max_turn_per_scan_rad = 1.2;
   /// With odometry, an estimate farther than this many standard deviations (Mahalanobis, of
   /// the odometry noise model) from the prediction is rejected as a false match.
   double max_prior_mahalanobis = 4.0;

@@ -37,6 +37,13 @@ bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma
   return e.dot(prior.covariance.ldlt().solve(e)) <= max_sigma * max_sigma;
 }
 
+// Without odometry: whether a correction of the prediction (the last pose) implies a motion a
+// robot can make between two scans.
+bool WithinMotionBound(const Pose2& correction, const ShapeSlamParams& params) {
+  return correction.Translation().norm() <= params.max_motion_per_scan_m &&
+         std::abs(correction.theta) <= params.max_turn_per_scan_rad;
+}
+
 // Shape matching (§4.2, §4.3) of the scan against one model; its alignment is a candidate.
 std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Polyline>& model,
                                     bool model_cyclic, const std::optional<Pose2>& guess,
@@ -127,6 +134,7 @@ std::vector<std::pair<double, Pose2>> RankCandidates(const std::vector<Pose2>& c
   for (const Pose2& candidate : candidates) {
     const Pose2 aligned = icp.Align(samples, candidate, kCandidateIcpIterations);
     if (prior && !WithinPrior(aligned, *prior, params.max_prior_mahalanobis)) continue;
+    if (!prior && !WithinMotionBound(aligned, params)) continue;
     ranked.emplace_back(icp.InlierRatio(samples, aligned), aligned);
   }
   std::stable_sort(ranked.begin(), ranked.end(),
@@ -165,6 +173,7 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
         RefineAlignment(samples, all, aligned, prior, params.refinement);
     if (!refined.converged) continue;
     if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
+    if (!prior && !WithinMotionBound(refined.T_map_scan, params)) continue;
     loc.correction = refined.T_map_scan;
     loc.covariance = refined.covariance;
     loc.rms_error_m = refined.rms_error_m;

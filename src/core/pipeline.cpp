@@ -130,6 +130,8 @@ void ShapeSlamParams::Validate() const {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
   Positive(max_prior_mahalanobis, "ShapeSlamParams::max_prior_mahalanobis");
+  Positive(max_motion_per_scan_m, "ShapeSlamParams::max_motion_per_scan_m");
+  Positive(max_turn_per_scan_rad, "ShapeSlamParams::max_turn_per_scan_rad");
   if (scan_match_seed_pairs < 1 || scan_match_seeds < 1) {
     throw std::invalid_argument(
         "ShapeSlamParams::scan_match_seed_pairs and scan_match_seeds must be >= 1");

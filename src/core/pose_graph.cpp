@@ -54,7 +54,10 @@ void PoseGraph::AddEdge(const PoseGraphEdge& edge) {
 PoseGraphResult PoseGraph::Optimize(const PoseGraphParams& params) {
   params.Validate();
   PoseGraphResult result;
-  if (poses_.size() < 2) return result;
+  if (poses_.size() < 2 || edges_.empty()) {  // nothing to optimise: the estimates stand
+    result.converged = true;
+    return result;
+  }
   std::vector<std::array<double, 3>> x(poses_.size());
   for (std::size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
   ceres::Problem::Options problem_options;
@@ -65,6 +68,7 @@ PoseGraphResult PoseGraph::Optimize(const PoseGraphParams& params) {
         internal::RelativePoseCost::Create(e.T_from_to, SqrtInformation(e.covariance)), loss,
         x[e.from].data(), x[e.to].data());
   }
+  problem.AddParameterBlock(x[0].data(), 3);  // node 0 may have no edge of its own
   problem.SetParameterBlockConstant(x[0].data());
   ceres::Solver::Options options;
   options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;

@@ -38,6 +38,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "alignment_dce_threshold_m", "lighter DCE of the polylines whose samples drive the alignment (m)", &p.alignment_dce_threshold_m},
       {"pipeline", "visibility_fov_margin_rad", "visible map shape = scan field of view widened by this on each side (rad)", &p.visibility_fov_margin_rad},
       {"pipeline", "max_prior_mahalanobis", "with odometry, estimates beyond this many standard deviations of it are rejected", &p.max_prior_mahalanobis},
+      {"pipeline", "max_motion_per_scan_m", "without odometry, estimates implying a larger motion since the last scan are rejected (m) ...", &p.max_motion_per_scan_m},
+      {"pipeline", "max_turn_per_scan_rad", "... or a larger turn (rad)", &p.max_turn_per_scan_rad},
       {"pipeline", "max_untrusted_coverage", "an unconfirmed scan updates the map only if less than this fraction of it is near the map", &p.max_untrusted_coverage},
       {"pipeline", "new_territory_distance_m", "'near the map' distance of that rule (m)", &p.new_territory_distance_m},
       {"pipeline", "min_inlier_ratio", "a match is trusted when this fraction of the scan lies on the map after it", &p.min_inlier_ratio},

@@ -1,0 +1,163 @@
+// The mapper (pipeline.h) end to end on a simulated run: a robot drives twice around a block
+// in a furnished loop corridor with drifting odometry; the map and trajectory come out right,
+// the run is bit-for-bit deterministic, and it also works without odometry.
+#include "shape_slam/pipeline.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "shape_slam/evaluation.h"
+#include "test_scenes.h"
+
+namespace shape_slam {
+namespace {
+
+// A 14 x 10 m hall around a 8 x 4 m block, with alcoves and pillars so that shapes differ.
+testing::Scene LoopWorld() {
+  testing::Scene s = testing::Room(0.0, 0.0, 14.0, 10.0);
+  const testing::Scene block = testing::Room(3.0, 3.0, 11.0, 7.0);
+  s.insert(s.end(), block.begin(), block.end());
+  testing::AddPillar(s, {0.6, 5.0}, 0.2);
+  testing::AddPillar(s, {13.4, 2.0}, 0.15);
+  testing::AddPillar(s, {7.0, 9.4}, 0.25);
+  s.push_back({{5.0, 0.0}, {5.0, 0.6}});
+  s.push_back({{5.0, 0.6}, {6.0, 0.6}});
+  s.push_back({{9.0, 10.0}, {9.0, 9.4}});
+  s.push_back({{14.0, 6.0}, {13.3, 6.5}});
+  return s;
+}
+
+struct SimRun {
+  std::vector<LaserScan> scans;
+  std::vector<StampedPose> truth;
+};
+
+// Twice around the block at 1.5 m from it, 0.15 m and up to 0.15 rad per scan; odometry with
+// 3 % scale error and a heading bias, so that it drifts by metres over the run.
+SimRun Simulate(unsigned seed) {
+  const testing::Scene world = LoopWorld();
+  std::mt19937 prng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const std::vector<Point2> corners = {{1.5, 1.5}, {12.5, 1.5}, {12.5, 8.5}, {1.5, 8.5}};
+  SimRun run;
+  Pose2 odom;
+  Pose2 previous(corners[0].x(), corners[0].y(), 0.0);
+  double t = 100.0;
+  for (int lap = 0; lap < 2; ++lap) {
+    for (int c = 0; c < 4; ++c) {
+      const Point2 a = corners[c], b = corners[(c + 1) % 4];
+      const double heading = std::atan2(b.y() - a.y(), b.x() - a.x());
+      // Turn on the spot, then drive.
+      while (std::abs(NormalizeAngle(heading - previous.theta)) > 1e-9) {
+        const double turn = std::clamp(NormalizeAngle(heading - previous.theta), -0.15, 0.15);
+        const Pose2 next(previous.x, previous.y, NormalizeAngle(previous.theta + turn));
+        run.truth.push_back({t, next});
+        const Pose2 d = previous.Inverse() * next;
+        odom = odom * Pose2(d.x * 1.03, d.y, d.theta * 1.02 + 0.002 + 0.003 * n(prng));
+        LaserScan scan = testing::SimulateScan(world, next, testing::ScannerModel{}, prng);
+        scan.timestamp_s = t;
+        scan.T_odom_robot = odom;
+        run.scans.push_back(scan);
+        previous = next;
+        t += 0.1;
+      }
+      const double length = (b - a).norm();
+      const int steps = static_cast<int>(std::ceil(length / 0.15));
+      for (int k = 1; k <= steps; ++k) {
+        const Point2 p = a + (b - a) * (static_cast<double>(k) / steps);
+        const Pose2 next(p.x(), p.y(), heading);
+        run.truth.push_back({t, next});
+        const Pose2 d = previous.Inverse() * next;
+        odom = odom * Pose2(d.x * 1.03 + 0.005 * n(prng), d.y + 0.005 * n(prng),
+                            d.theta + 0.004 + 0.003 * n(prng));
+        LaserScan scan = testing::SimulateScan(world, next, testing::ScannerModel{}, prng);
+        scan.timestamp_s = t;
+        scan.T_odom_robot = odom;
+        run.scans.push_back(scan);
+        previous = next;
+        t += 0.1;
+      }
+    }
+  }
+  return run;
+}
+
+struct Outcome {
+  std::vector<StampedPose> trajectory;
+  std::size_t polylines = 0, vertices = 0;
+};
+
+Outcome Map(const SimRun& run, const ShapeSlamParams& params) {
+  ShapeSlam slam(params);
+  for (const LaserScan& scan : run.scans) slam.Process(scan);
+  return {slam.Trajectory(), slam.Map().NumPolylines(), slam.Map().NumVertices()};
+}
+
+double Ate(const Outcome& outcome, const SimRun& run) {
+  return EvaluateTrajectory(outcome.trajectory, run.truth, {}).ate_rmse_m;
+}
+
+// Odometry alone, for comparison.
+double OdometryAte(const SimRun& run) {
+  std::vector<StampedPose> odom;
+  for (const LaserScan& s : run.scans) odom.push_back({s.timestamp_s, *s.T_odom_robot});
+  return EvaluateTrajectory(odom, run.truth, {}).ate_rmse_m;
+}
+
+TEST(PipelineTest, MapsTheLoopWithOdometry) {
+  const SimRun run = Simulate(1);
+  const double odometry_ate = OdometryAte(run);
+  ASSERT_GT(odometry_ate, 0.5);  // the odometry really drifts
+  const Outcome outcome = Map(run, ShapeSlamParams{});
+  ASSERT_EQ(outcome.trajectory.size(), run.scans.size());
+  EXPECT_LT(Ate(outcome, run), 0.05) << "odometry alone: " << odometry_ate;
+  // A compact map: the hall has 8 walls + 4 sides of the block + 3 pillars + 4 features.
+  EXPECT_GT(outcome.polylines, 5u);
+  EXPECT_LT(outcome.polylines, 80u);
+  EXPECT_LT(outcome.vertices, 400u);
+}
+
+TEST(PipelineTest, IsDeterministic) {
+  const SimRun run = Simulate(2);
+  const Outcome a = Map(run, ShapeSlamParams{});
+  const Outcome b = Map(run, ShapeSlamParams{});
+  ASSERT_EQ(a.trajectory.size(), b.trajectory.size());
+  for (std::size_t i = 0; i < a.trajectory.size(); ++i) {
+    // Bit-identical, not merely close.
+    EXPECT_EQ(a.trajectory[i].pose.x, b.trajectory[i].pose.x) << i;
+    EXPECT_EQ(a.trajectory[i].pose.y, b.trajectory[i].pose.y) << i;
+    EXPECT_EQ(a.trajectory[i].pose.theta, b.trajectory[i].pose.theta) << i;
+  }
+  EXPECT_EQ(a.vertices, b.vertices);
+}
+
+TEST(PipelineTest, MapsTheLoopWithoutOdometry) {
+  const SimRun run = Simulate(3);
+  ShapeSlamParams params;
+  params.use_odometry = false;
+  const Outcome outcome = Map(run, params);
+  ASSERT_EQ(outcome.trajectory.size(), run.scans.size());
+  EXPECT_LT(Ate(outcome, run), 0.10);
+}
+
+TEST(PipelineTest, ScansWithoutPointsAndMalformedScans) {
+  const SimRun run = Simulate(4);
+  ShapeSlam slam;
+  for (std::size_t i = 0; i < 20; ++i) slam.Process(run.scans[i]);
+  LaserScan empty = run.scans[20];
+  for (double& r : empty.ranges_m) r = std::nan("");
+  const ScanReport report = slam.Process(empty);  // not an error: predicted, map unchanged
+  EXPECT_FALSE(report.matched);
+  LaserScan bad = run.scans[21];
+  bad.angles_rad.pop_back();
+  EXPECT_THROW(slam.Process(bad), std::invalid_argument);
+  bad = run.scans[21];
+  bad.timestamp_s = std::nan("");
+  EXPECT_THROW(slam.Process(bad), std::invalid_argument);
+  EXPECT_NO_THROW(slam.Process(run.scans[22]));
+}
+
+}  // namespace
+}  // namespace shape_slam
