@@ -8,6 +8,7 @@ PACKAGES=(
   libmrpt-dev mrpt-apps mrpt-common          # MRPT 2.5.8: libraries, icp-slam & co, sample logs
   libceres-dev libeigen3-dev libopencv-dev
   libgtest-dev libgmock-dev libbenchmark-dev
+  python3-matplotlib                         # bench/run_all plots
 )
 
 missing=()

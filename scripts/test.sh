@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command (README, second command; .ci/run calls it): installs what is missing, builds
 # and runs the whole test suite, then again under AddressSanitizer + UndefinedBehaviorSanitizer,
-# and checks that the core builds with the MRPT parts switched off.
+# runs the benchmark harness on a small log (bench/run_all --quick), and checks that the core
+# builds with the MRPT parts switched off.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 jobs=$(nproc)
@@ -15,6 +16,9 @@ bash scripts/build.sh
 
 step "tests (Release)"
 ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j"$jobs"
+
+step "benchmark harness, quick mode (bench/run_all --quick)"
+bench/run_all --quick
 
 step "sanitizer build (ASan + UBSan)"
 BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo \
