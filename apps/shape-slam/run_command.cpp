@@ -110,7 +110,14 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("per_scan_ms").BeginObject();
   json.Key("median").Value(Percentile(out.scan_ms, 0.5)).Key("p95").Value(Percentile(out.scan_ms, 0.95));
   json.Key("max").Value(out.scan_ms.empty() ? 0.0 : *std::max_element(out.scan_ms.begin(), out.scan_ms.end()));
-  json.Key("mean").Value(out.scan_ms.empty() ? 0.0 : sum / out.scan_ms.size()).EndObject();
+  json.Key("mean").Value(out.scan_ms.empty() ? 0.0 : sum / out.scan_ms.size());
+  // Medians over the first and the last tenth of the log: whether the time grows with the map.
+  const std::size_t tenth = out.scan_ms.size() / 10;
+  json.Key("first_tenth_median")
+      .Value(Percentile({out.scan_ms.begin(), out.scan_ms.begin() + tenth}, 0.5));
+  json.Key("last_tenth_median")
+      .Value(Percentile({out.scan_ms.end() - tenth, out.scan_ms.end()}, 0.5))
+      .EndObject();
   json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(out.keyframes);
   json.Key("loop_closures").Value(out.loop_closures);
   json.Key("odometry").Value(params.use_odometry);

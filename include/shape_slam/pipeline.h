@@ -55,7 +55,11 @@ struct OdometryNoiseParams {
 /// optimised and the map rebuilt from the keyframes at their corrected poses.
 struct LoopClosureParams {
   bool enabled = true;
-  int search_every = 2;             ///< keyframes between loop searches
+  /// Keyframes between loop searches. A search (shape matching against up to max_candidates
+  /// old keyframes, with and without the estimate as guess) costs several times a scan's
+  /// tracking; measured on the development logs, searching every 4th keyframe instead of every
+  /// 2nd closed the same loops as well and cut the median time per scan by a quarter.
+  int search_every = 4;
   /// Metres around the estimate. Around a large loop (a hundred metres and more) the drift of a
   /// few percent reaches several metres before the loop closes; wrong candidates cost little,
   /// since a closure must match both ways and correct within bounds. Measured on the
