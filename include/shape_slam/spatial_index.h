@@ -53,8 +53,14 @@ class SegmentIndex {
     Polyline points;
     std::vector<CellKey> cells;  // cells holding at least one of its segments
   };
+  /// Segments crossing more cells than this are kept in long_segments_ instead of the cells
+  /// (a corrupt or far-flung input must not cost time and memory in proportion to its length).
+  static constexpr std::int64_t kMaxCellsPerSegment = 1024;
+  bool BoxMeetsSegment(const SegmentRef& ref, const Point2& min, const Point2& max) const;
+
   double cell_size_m_;
   std::unordered_map<CellKey, std::vector<SegmentRef>> cells_;
+  std::vector<SegmentRef> long_segments_;
   std::unordered_map<PolylineId, Entry> polylines_;
 };
 

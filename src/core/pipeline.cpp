@@ -259,7 +259,7 @@ std::vector<int> ShapeSlam::LoopCandidates() const {
   std::vector<int> candidates;
   for (const auto& [score, k] : scored) {
     // Neighbouring keyframes see nearly the same: spread the tries along the old path.
-    const bool near_tried = std::any_of(candidates.begin(), candidates.end(), [&](int c) {
+    const bool near_tried = std::any_of(candidates.begin(), candidates.end(), [&, k = k](int c) {
       return std::abs(keyframes_[c].travel_m - keyframes_[k].travel_m) < 2.0;
     });
     if (!near_tried) candidates.push_back(k);

@@ -20,6 +20,8 @@ struct DirectedSample {
   Point2 direction;  // unit vector
 };
 
+constexpr double kMaxDeviationSamplesPerSegment = 1000.0;
+
 // Samples at the centres of equal pieces of every segment (at least one per segment).
 std::vector<DirectedSample> SampleWithDirections(const Polyline& polyline, double spacing_m) {
   std::vector<DirectedSample> samples;
@@ -27,7 +29,10 @@ std::vector<DirectedSample> SampleWithDirections(const Polyline& polyline, doubl
     const Point2 d = polyline[i + 1] - polyline[i];
     const double length = d.norm();
     if (length <= 0.0) continue;
-    const int n = std::max(1, static_cast<int>(std::ceil(length / spacing_m)));
+    // At most kMaxDeviationSamplesPerSegment per segment: a group joins neighbouring polylines
+    // by the segments between them, which can be arbitrarily long (far-apart objects).
+    const int n = static_cast<int>(std::clamp(std::ceil(length / spacing_m), 1.0,
+                                              kMaxDeviationSamplesPerSegment));
     for (int k = 0; k < n; ++k) {
       samples.push_back({polyline[i] + d * ((k + 0.5) / n), d / length});
     }

@@ -15,8 +15,11 @@ SegmentIndex::SegmentIndex(double cell_size_m) : cell_size_m_(cell_size_m) {
   }
 }
 
+// Cell coordinates are clamped to the 32 bits a key holds: beyond +-2^31 cells (thousands of
+// kilometres) cells merge, which only adds candidates, and the conversion stays defined.
 std::int64_t SegmentIndex::Cell(double v) const {
-  return static_cast<std::int64_t>(std::floor(v / cell_size_m_));
+  constexpr double kLimit = 2147483647.0;
+  return static_cast<std::int64_t>(std::clamp(std::floor(v / cell_size_m_), -kLimit, kLimit));
 }
 
 SegmentIndex::CellKey SegmentIndex::Key(std::int64_t ix, std::int64_t iy) const {
@@ -66,6 +69,11 @@ void SegmentIndex::Insert(PolylineId id, const Polyline& polyline) {
   for (std::size_t i = 0; i < segments; ++i) {
     const Point2& a = polyline[i];
     const Point2& b = polyline[std::min(i + 1, polyline.size() - 1)];
+    if (std::abs(Cell(b.x()) - Cell(a.x())) + std::abs(Cell(b.y()) - Cell(a.y())) >
+        kMaxCellsPerSegment) {
+      long_segments_.push_back({id, static_cast<std::uint32_t>(i)});
+      continue;
+    }
     for (const CellKey key : CellsOfSegment(a, b)) {
       std::vector<SegmentRef>& refs = cells_[key];
       const SegmentRef ref{id, static_cast<std::uint32_t>(i)};
@@ -81,6 +89,9 @@ void SegmentIndex::Insert(PolylineId id, const Polyline& polyline) {
 void SegmentIndex::Remove(PolylineId id) {
   const auto it = polylines_.find(id);
   if (it == polylines_.end()) return;
+  long_segments_.erase(std::remove_if(long_segments_.begin(), long_segments_.end(),
+                                      [id](const SegmentRef& r) { return r.polyline == id; }),
+                       long_segments_.end());
   for (const CellKey key : it->second.cells) {
     const auto cell = cells_.find(key);
     if (cell == cells_.end()) continue;
@@ -95,6 +106,7 @@ void SegmentIndex::Remove(PolylineId id) {
 
 void SegmentIndex::Clear() {
   cells_.clear();
+  long_segments_.clear();
   polylines_.clear();
 }
 
@@ -102,7 +114,8 @@ std::vector<SegmentRef> SegmentIndex::Collect(const Point2& min, const Point2& m
   std::vector<SegmentRef> out;
   if (!(min.x() <= max.x() && min.y() <= max.y())) return out;
   const std::int64_t x0 = Cell(min.x()), x1 = Cell(max.x()), y0 = Cell(min.y()), y1 = Cell(max.y());
-  if ((x1 - x0 + 1) * (y1 - y0 + 1) > static_cast<std::int64_t>(4 * cells_.size() + 16)) {
+  if (static_cast<double>(x1 - x0 + 1) * static_cast<double>(y1 - y0 + 1) >
+      static_cast<double>(4 * cells_.size() + 16)) {
     // A query larger than the map: scanning the occupied cells is cheaper.
     for (const auto& [key, refs] : cells_) {
       const auto ix = static_cast<std::int32_t>(key >> 32), iy = static_cast<std::int32_t>(key);
@@ -116,9 +129,22 @@ std::vector<SegmentRef> SegmentIndex::Collect(const Point2& min, const Point2& m
       }
     }
   }
+  for (const SegmentRef& ref : long_segments_) {
+    if (BoxMeetsSegment(ref, min, max)) out.push_back(ref);
+  }
   std::sort(out.begin(), out.end());
   out.erase(std::unique(out.begin(), out.end()), out.end());
   return out;
+}
+
+// Whether the segment's bounding box meets the box (conservative, like the cells).
+bool SegmentIndex::BoxMeetsSegment(const SegmentRef& ref, const Point2& min,
+                                   const Point2& max) const {
+  const Polyline& p = polylines_.at(ref.polyline).points;
+  const Point2& a = p[ref.segment];
+  const Point2& b = ref.segment + 1 < p.size() ? p[ref.segment + 1] : a;
+  return std::min(a.x(), b.x()) <= max.x() && std::max(a.x(), b.x()) >= min.x() &&
+         std::min(a.y(), b.y()) <= max.y() && std::max(a.y(), b.y()) >= min.y();
 }
 
 std::vector<SegmentRef> SegmentIndex::QueryBox(const Point2& min, const Point2& max) const {

@@ -123,7 +123,14 @@ class Fields {
 
   std::size_t size() const { return tokens_.size(); }
   std::size_t remaining() const { return tokens_.size() - next_; }
-  std::string_view Text() { return tokens_.at(next_++); }
+  /// The next field; a record that ends early is a RecordError (a recorder that died mid-line).
+  std::string_view Text() {
+    if (next_ >= tokens_.size()) {
+      throw RecordError("the record ends after " + std::to_string(tokens_.size()) +
+                        " fields, more were expected");
+    }
+    return tokens_[next_++];
+  }
 
   double Number(const char* what) {
     const std::string_view token = Text();
@@ -270,6 +277,12 @@ RobotLaserHeader ParseRobotLaserHeader(Fields& fields) {
   header.start_angle_rad = fields.FiniteNumber("start_angle");
   fields.FiniteNumber("fov");
   header.angular_resolution_rad = fields.FiniteNumber("angular_res");
+  // Beam directions beyond a few turns are not a laser's (and overflow to inf further on).
+  constexpr double kMaxAngle = 4.0 * M_PI;
+  if (std::abs(header.start_angle_rad) > kMaxAngle ||
+      std::abs(header.angular_resolution_rad) > kMaxAngle) {
+    throw RecordError("start_angle or angular_res beyond +-4 pi rad");
+  }
   header.max_range_m = fields.FiniteNumber("max_range");
   if (header.max_range_m <= 0.0) {
     throw RecordError("max_range " + internal::FormatNumber(header.max_range_m) + " is not > 0");
