@@ -1,0 +1,96 @@
+// Options of the MRPT map classes (CPolylineMap, CPolylinePointsMap) and their ini mapping.
+//
+// The options are the core's parameters (pipeline.h, map_update.h, ...), grouped the way MRPT
+// groups map options, one ini section each (<prefix> is e.g. "MappingApplication_polylineMap_00"):
+//   [<prefix>_creationOpts]    CreationOptions   (+ MRPT's enableSaveAs3DObject,
+//                                                   enableObservationLikelihood,
+//                                                   enableObservationInsertion)
+//   [<prefix>_insertOpts]      InsertionOptions  (extraction, simplification, map update)
+//   [<prefix>_likelihoodOpts]  LikelihoodOptions (observation likelihood for particle filters)
+// Keys are the field names below and those of the core structs they hold: ExtractionParams and
+// MapUpdateParams fields unprefixed (max_gap_m, dce_threshold_m, ...), VisibilityParams fields
+// prefixed with "visibility_" (visibility_max_range_m, ...). The loader is strict: an unknown
+// key in one of these sections, a value that does not parse, or one that fails validation throws
+// std::invalid_argument naming the section and the key; a typo is never silently ignored.
+// Missing keys keep their defaults, which are the pipeline's (ShapeSlamParams{}).
+#pragma once
+
+#include <iosfwd>
+#include <string>
+
+#include "shape_slam/map_update.h"
+#include "shape_slam/polyline_extraction.h"
+#include "shape_slam/visibility.h"
+
+namespace mrpt::config {
+class CConfigFileBase;
+}  // namespace mrpt::config
+
+namespace shape_slam {
+
+/// [..._creationOpts]
+struct CreationOptions {
+  /// Cell size of the map's spatial index (ShapeSlamParams::index_cell_size_m), metres.
+  double index_cell_size_m = 2.0;
+  /// Spacing of the points sampled along the polylines: the point cloud of CPolylinePointsMap
+  /// and the indices (globalIdx) of matchings, metres.
+  double sample_spacing_m = 0.05;
+  void Validate() const;
+};
+
+/// [..._insertOpts]: how a CObservation2DRangeScan becomes polylines and updates the map, as in
+/// the pipeline (pipeline.h): extraction (§3.1), the light DCE of the alignment polylines, the
+/// visible map shape at the scan's pose (for the contradiction rule) and the map update (§5.2).
+struct InsertionOptions {
+  ExtractionParams extraction;
+  /// ShapeSlamParams::alignment_dce_threshold_m, metres.
+  double alignment_dce_threshold_m = 0.005;
+  /// ShapeSlamParams::alignment_max_deviation_m, metres.
+  double alignment_max_deviation_m = 0.02;
+  /// The visible map shape; max_range_m is cut to the scan's farthest reading + 1 m, fov_rad is
+  /// the scan's field of view widened by visibility_fov_margin_rad on each side.
+  VisibilityParams visibility;
+  double visibility_fov_margin_rad = 0.35;  ///< radians
+  MapUpdateParams map_update;
+  void Validate() const;
+};
+
+/// [..._likelihoodOpts]: a likelihood field on the polylines (as MRPT's LF model for grids):
+/// every `decimation`-th valid reading, at distance d to the nearest polyline (d capped at
+/// max_corr_distance_m), contributes log(z_hit exp(-d^2 / (2 sigma_m^2)) + z_random / max_range_m).
+/// The defaults are those of COccupancyGridMap2D's LF_* options, decimation aside.
+struct LikelihoodOptions {
+  double sigma_m = 0.35;              ///< standard deviation of the distance (LF_stdHit), metres
+  double max_corr_distance_m = 0.30;  ///< distances are capped at this, metres
+  double z_hit = 0.95;                ///< weight of the Gaussian, [0, 1]
+  double z_random = 0.05;             ///< weight of random readings, [0, 1]
+  double max_range_m = 81.0;          ///< readings at or beyond this are ignored, metres
+  int decimation = 10;                ///< use every n-th beam, >= 1
+  void Validate() const;
+};
+
+struct PolylineMapOptions {
+  CreationOptions creation;
+  InsertionOptions insertion;
+  LikelihoodOptions likelihood;
+  /// Throws std::invalid_argument naming the offending field.
+  void Validate() const;
+};
+
+/// Reads the three sections <prefix>_creationOpts, _insertOpts, _likelihoodOpts over `defaults`
+/// (see the file comment). Throws std::invalid_argument naming the section and key.
+PolylineMapOptions LoadPolylineMapOptions(const mrpt::config::CConfigFileBase& source,
+                                          const std::string& prefix,
+                                          const PolylineMapOptions& defaults = {});
+
+/// Writes every option as `key = value` lines under "[<prefix>_...Opts]" headers.
+void DumpPolylineMapOptions(const PolylineMapOptions& options, const std::string& prefix,
+                            std::ostream& out);
+
+/// True when every field is equal.
+bool operator==(const PolylineMapOptions& a, const PolylineMapOptions& b);
+inline bool operator!=(const PolylineMapOptions& a, const PolylineMapOptions& b) {
+  return !(a == b);
+}
+
+}  // namespace shape_slam
