@@ -12,6 +12,15 @@
 
 namespace shape_slam::app {
 
+/// Installs handlers of fatal signals (SIGSEGV, SIGBUS, SIGFPE, SIGILL) that print what the
+/// tool was doing (SetFatalContext) and exit with code 1 instead of dumping core. They exist for
+/// crashes in third-party decoders on corrupt input (MRPT 2.5.8's rawlog deserialization can
+/// dereference garbage). Not installed in sanitizer builds, whose own reports say more.
+void InstallFatalSignalHandlers();
+
+/// What the tool is doing, for the fatal-signal message (truncated to 400 characters).
+void SetFatalContext(const std::string& context);
+
 /// Opens a log; in non-strict mode malformed records are skipped and reported by
 /// ReportLogIssues.
 std::unique_ptr<io::LogReader> OpenLogForApp(const std::string& path, bool strict);

@@ -3,6 +3,7 @@
 #include <iostream>
 #include <string>
 
+#include "app_common.h"
 #include "cli.h"
 #include "commands.h"
 
@@ -42,6 +43,7 @@ void PrintHelp(std::ostream& out) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  shape_slam::app::InstallFatalSignalHandlers();
   if (argc < 2) {
     PrintHelp(std::cerr);
     return 2;
@@ -54,6 +56,7 @@ int main(int argc, char** argv) {
   const Args args(argv + 2, argv + argc);
   for (const Command& command : kCommands) {
     if (name != command.name) continue;
+    shape_slam::app::SetFatalContext("running 'shape-slam " + name + "'");
     try {
       return command.run(args);
     } catch (const shape_slam::app::UsageError& e) {

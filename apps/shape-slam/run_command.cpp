@@ -184,6 +184,7 @@ int RunRun(const Args& args) {
   if (scans.empty()) throw std::runtime_error(log + ": no laser scans to map");
 
   ShapeSlam slam(params);
+  SetFatalContext("mapping the log " + log.substr(0, 400));
   const RunOutput out = RunMapper(slam, scans, quiet);
   const std::string map_text = io::FormatMapFile(slam.Map());
   const double wall_s =
