@@ -26,6 +26,7 @@ BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo \
 
 step "tests (ASan + UBSan)"
 ASAN_OPTIONS=detect_leaks=1:abort_on_error=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+  LSAN_OPTIONS=suppressions=$PWD/tests/sanitizers/lsan.supp \
   ctest --test-dir build-asan --output-on-failure -j"$jobs"
 
 step "core alone (SHAPE_SLAM_WITH_MRPT=OFF, no apps): configure and build"
