@@ -182,8 +182,8 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     break;
   }
   if (!loc.trusted) loc.correction = Pose2();
-  const ModelIcp near(all, params.new_territory_distance_m, params.new_territory_distance_m);
-  loc.coverage = near.InlierRatio(samples, loc.correction);
+  const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
+  loc.coverage = InlierRatio(samples, near, loc.correction);
   return loc;
 }
 
