@@ -152,34 +152,49 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     guess = Pose2();  // the model is already seen from the odometry prediction
     prior = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
   }
-  std::vector<Pose2> candidates;
-  for (const auto& [shape_model, cyclic] :
-       {std::pair{&model.map_coarse, model.map_cyclic}, std::pair{&model.recent_coarse, false}}) {
-    if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, params,
-                                loc.matched_pairs)) {
-      candidates.push_back(*c);
-    }
-  }
-  if (guess) candidates.push_back(*guess);
   std::vector<Polyline> all = model.map;
   all.insert(all.end(), model.recent_fine.begin(), model.recent_fine.end());
   const std::vector<Point2> samples =
       AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
   if (samples.empty() || all.empty()) return loc;
   const ModelIcp icp(all, params.coarse_gate_m, params.matcher.inlier_distance_m);
-  // The best-fitting candidate gets the one Ceres refinement; should it fail, the next.
-  for (const auto& [ratio, aligned] : RankCandidates(candidates, samples, icp, prior, params)) {
-    const RefinementResult refined =
-        RefineAlignment(samples, all, aligned, prior, params.refinement);
-    if (!refined.converged) continue;
-    if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
-    if (!prior && !WithinMotionBound(refined.T_map_scan, params)) continue;
-    loc.correction = refined.T_map_scan;
-    loc.covariance = refined.covariance;
-    loc.rms_error_m = refined.rms_error_m;
-    loc.inlier_ratio = icp.InlierRatio(samples, refined.T_map_scan);
-    loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
-    break;
+  // Shape matching against the visible map and the last keyframe; the candidates, finished by
+  // ICP, ranked by fit; the best one that the Ceres refinement accepts wins.
+  const auto localize = [&](const ShapeMatcherParams& matcher) {
+    ShapeSlamParams p = params;
+    p.matcher = matcher;
+    std::vector<Pose2> candidates;
+    for (const auto& [shape_model, cyclic] : {std::pair{&model.map_coarse, model.map_cyclic},
+                                              std::pair{&model.recent_coarse, false}}) {
+      if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, p,
+                                  loc.matched_pairs)) {
+        candidates.push_back(*c);
+      }
+    }
+    if (guess) candidates.push_back(*guess);
+    for (const auto& [ratio, aligned] : RankCandidates(candidates, samples, icp, prior, params)) {
+      const RefinementResult refined =
+          RefineAlignment(samples, all, aligned, prior, params.refinement);
+      if (!refined.converged) continue;
+      if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
+      if (!prior && !WithinMotionBound(refined.T_map_scan, params)) continue;
+      loc.correction = refined.T_map_scan;
+      loc.covariance = refined.covariance;
+      loc.rms_error_m = refined.rms_error_m;
+      loc.inlier_ratio = icp.InlierRatio(samples, refined.T_map_scan);
+      loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
+      break;
+    }
+  };
+  localize(params.matcher);
+  // Without odometry nothing else says where the robot went: a scan that found no trusted match
+  // tries again with as many seed pairs as scan-to-scan matching uses (scan_match_*), which
+  // costs about twice as much and is needed only for the odd scan.
+  if (!loc.trusted && !odometry_delta) {
+    ShapeMatcherParams thorough = params.matcher;
+    thorough.max_seed_pairs = params.scan_match_seed_pairs;
+    thorough.num_seeds = params.scan_match_seeds;
+    localize(thorough);
   }
   if (!loc.trusted) loc.correction = Pose2();
   const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
