@@ -31,4 +31,9 @@ struct ExtractionParams {
 /// differ in size or the params are invalid.
 std::vector<Polyline> ExtractPolylines(const LaserScan& scan, const ExtractionParams& params);
 
+/// The scan with its beams in increasing angle (reversed when they run clockwise), so that its
+/// polylines run counter-clockwise like the visible map shape (§3: both are ordered
+/// counter-clockwise).
+LaserScan CounterClockwiseScan(const LaserScan& scan);
+
 }  // namespace shape_slam

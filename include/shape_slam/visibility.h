@@ -43,6 +43,14 @@ struct VisiblePolyline {
 /// counter-clockwise by the bearing of their first vertex starting at the right edge of the
 /// field of view (-fov/2; -pi for 360 deg). `index` must hold exactly `polylines_map`'s
 /// polylines. Deterministic.
+/// The visibility parameters for the map shape a scan is matched against or merged with: `base`
+/// with max_range_m cut to as far as the scan reaches (its farthest valid reading beyond
+/// min_range_m, plus 1 m; at least 1 m: what the scan cannot see cannot match it, and the
+/// sweep's cost grows with range) and fov_rad = the scan's field of view (span of its beams plus
+/// one beam step) widened by fov_margin_rad on each side, at most 2 pi.
+VisibilityParams VisibilityForScan(const LaserScan& scan, const VisibilityParams& base,
+                                   double min_range_m, double fov_margin_rad);
+
 std::vector<VisiblePolyline> ComputeVisibleShape(
     const std::unordered_map<PolylineId, Polyline>& polylines_map, const SegmentIndex& index,
     const Pose2& T_map_sensor, const VisibilityParams& params);

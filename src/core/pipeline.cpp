@@ -33,24 +33,6 @@ void ValidateScan(const LaserScan& scan) {
   }
 }
 
-// The scan with its beams in increasing angle, so that polylines run counter-clockwise like
-// the visible map shape (§3: both are ordered counter-clockwise).
-LaserScan CounterClockwise(const LaserScan& scan) {
-  if (scan.angles_rad.size() < 2 || scan.angles_rad.front() <= scan.angles_rad.back()) return scan;
-  LaserScan ccw = scan;
-  std::reverse(ccw.ranges_m.begin(), ccw.ranges_m.end());
-  std::reverse(ccw.angles_rad.begin(), ccw.angles_rad.end());
-  return ccw;
-}
-
-// Angular coverage of a scan: span of its beams plus one beam step.
-double FieldOfView(const LaserScan& scan) {
-  const std::size_t n = scan.angles_rad.size();
-  if (n < 2) return 0.0;
-  const double span = scan.angles_rad.back() - scan.angles_rad.front();
-  return span + span / (n - 1);
-}
-
 // Edge covariance from a refinement covariance: scaled (samples are not independent) and floored.
 Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosureParams& params) {
   Eigen::Matrix3d c = params.covariance_scale * refined;
@@ -66,26 +48,12 @@ Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosure
   return c;
 }
 
-// Farthest valid reading of a scan, metres (0 when it has none).
-double FarthestReading(const LaserScan& scan, const ShapeSlamParams& params) {
-  double farthest = 0.0;
-  for (const double r : scan.ranges_m) {
-    if (std::isfinite(r) && r > params.extraction.min_range_m && r < scan.max_range_m) {
-      farthest = std::max(farthest, r);
-    }
-  }
-  return farthest;
-}
-
-// The visible shape is computed as far as the scan itself reaches (plus a margin), at most
-// max_range_m: what the scan cannot see cannot match it, and the sweep's cost grows with range.
+// The visible shape a scan is matched against: around the scan's own field of view, all around
+// when there is no pose estimate (§4.3).
 VisibilityParams VisibilityFor(const LaserScan& scan, bool no_estimate, const ShapeSlamParams& p) {
-  VisibilityParams visibility = p.visibility;
-  visibility.max_range_m =
-      std::max(1.0, std::min(visibility.max_range_m, FarthestReading(scan, p) + 1.0));
-  visibility.fov_rad =
-      no_estimate ? 2.0 * M_PI
-                  : std::min(2.0 * M_PI, FieldOfView(scan) + 2.0 * p.visibility_fov_margin_rad);
+  VisibilityParams visibility = VisibilityForScan(scan, p.visibility, p.extraction.min_range_m,
+                                                  p.visibility_fov_margin_rad);
+  if (no_estimate) visibility.fov_rad = 2.0 * M_PI;
   return visibility;
 }
 
@@ -373,7 +341,7 @@ std::vector<StampedPose> ShapeSlam::Trajectory() const {
 
 ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   ValidateScan(input_scan);
-  const LaserScan scan = CounterClockwise(input_scan);
+  const LaserScan scan = CounterClockwiseScan(input_scan);
   ScanReport report;
   report.timestamp_s = scan.timestamp_s;
   internal::Shapes shapes = internal::ExtractShapes(scan, params_);

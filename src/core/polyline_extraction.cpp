@@ -1,5 +1,6 @@
 #include "shape_slam/polyline_extraction.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -87,6 +88,14 @@ std::vector<Polyline> ExtractPolylines(const LaserScan& scan, const ExtractionPa
     }
   }
   return polylines;
+}
+
+LaserScan CounterClockwiseScan(const LaserScan& scan) {
+  if (scan.angles_rad.size() < 2 || scan.angles_rad.front() <= scan.angles_rad.back()) return scan;
+  LaserScan ccw = scan;
+  std::reverse(ccw.ranges_m.begin(), ccw.ranges_m.end());
+  std::reverse(ccw.angles_rad.begin(), ccw.angles_rad.end());
+  return ccw;
 }
 
 }  // namespace shape_slam

@@ -294,4 +294,22 @@ std::vector<VisiblePolyline> ComputeVisibleShape(
   return out;
 }
 
+VisibilityParams VisibilityForScan(const LaserScan& scan, const VisibilityParams& base,
+                                   double min_range_m, double fov_margin_rad) {
+  double farthest = 0.0;
+  for (const double r : scan.ranges_m) {
+    if (std::isfinite(r) && r > min_range_m && r < scan.max_range_m) farthest = std::max(farthest, r);
+  }
+  double fov = 0.0;
+  const std::size_t n = scan.angles_rad.size();
+  if (n >= 2) {
+    const double span = scan.angles_rad.back() - scan.angles_rad.front();
+    fov = span + span / (n - 1);
+  }
+  VisibilityParams visibility = base;
+  visibility.max_range_m = std::max(1.0, std::min(visibility.max_range_m, farthest + 1.0));
+  visibility.fov_rad = std::min(2.0 * M_PI, fov + 2.0 * fov_margin_rad);
+  return visibility;
+}
+
 }  // namespace shape_slam

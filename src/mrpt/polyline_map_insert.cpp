@@ -11,47 +11,18 @@
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
 #include "shape_slam/polyline_extraction.h"
+#include "shape_slam/visibility.h"
 #include "shape_slam_mrpt/conversions.h"
 #include "shape_slam_mrpt/polyline_map.h"
 
 namespace shape_slam {
 namespace {
 
-// The scan with its beams in increasing angle, so that polylines run counter-clockwise like
-// the visible map shape (as the pipeline does, §3).
-LaserScan CounterClockwise(LaserScan scan) {
-  if (scan.angles_rad.size() < 2 || scan.angles_rad.front() <= scan.angles_rad.back()) return scan;
-  std::reverse(scan.ranges_m.begin(), scan.ranges_m.end());
-  std::reverse(scan.angles_rad.begin(), scan.angles_rad.end());
-  return scan;
-}
-
-// Angular coverage of a scan: span of its beams plus one beam step.
-double FieldOfView(const LaserScan& scan) {
-  const std::size_t n = scan.angles_rad.size();
-  if (n < 2) return 0.0;
-  const double span = scan.angles_rad.back() - scan.angles_rad.front();
-  return span + span / static_cast<double>(n - 1);
-}
-
-double FarthestReading(const LaserScan& scan, double min_range_m) {
-  double farthest = 0.0;
-  for (const double r : scan.ranges_m) {
-    if (std::isfinite(r) && r > min_range_m && r < scan.max_range_m)
-      farthest = std::max(farthest, r);
-  }
-  return farthest;
-}
-
-// The visible map shape is computed over the scan's field of view plus a margin and as far as
-// the scan reaches plus 1 m (as the pipeline does).
+// The visible map shape over the scan's field of view plus a margin, as far as it reaches plus
+// 1 m (as the pipeline does).
 VisibilityParams VisibilityFor(const LaserScan& scan, const InsertionOptions& options) {
-  VisibilityParams visibility = options.visibility;
-  const double reach_m = FarthestReading(scan, options.extraction.min_range_m) + 1.0;
-  visibility.max_range_m = std::max(1.0, std::min(visibility.max_range_m, reach_m));
-  visibility.fov_rad =
-      std::min(2.0 * M_PI, FieldOfView(scan) + 2.0 * options.visibility_fov_margin_rad);
-  return visibility;
+  return VisibilityForScan(scan, options.visibility, options.extraction.min_range_m,
+                           options.visibility_fov_margin_rad);
 }
 
 // §3.1: the scan's polylines, simplified as the pipeline simplifies its alignment polylines,
@@ -76,7 +47,7 @@ bool CPolylineMap::internal_insertObservation(
   if (observation == nullptr) return false;
   LaserScan scan;
   try {
-    scan = CounterClockwise(ToLaserScan(*observation));
+    scan = CounterClockwiseScan(ToLaserScan(*observation));
   } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("shape_slam::CPolylineMap: cannot insert the laser scan '" +
                                 observation->sensorLabel + "': " + e.what());
