@@ -3,6 +3,7 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstring>
 #include <iostream>
 #include <stdexcept>
@@ -83,19 +84,36 @@ void ReportLogIssues(const io::LogReader& reader) {
   }
 }
 
-LaserScan ReadScanAt(const std::string& path, long long index, bool strict) {
+std::vector<LaserScan> ReadScansAt(const std::string& path, const std::vector<long long>& indices,
+                                   bool strict) {
   const std::unique_ptr<io::LogReader> reader = OpenLogForApp(path, strict);
+  const long long last = indices.empty() ? -1 : *std::max_element(indices.begin(), indices.end());
+  std::vector<std::optional<LaserScan>> found(indices.size());
   long long count = 0;
-  while (std::optional<LaserScan> scan = reader->Next()) {
-    if (count++ == index) {
-      ReportLogIssues(*reader);
-      return *scan;
+  while (count <= last) {
+    std::optional<LaserScan> scan = reader->Next();
+    if (!scan) break;
+    for (std::size_t k = 0; k < indices.size(); ++k) {
+      if (indices[k] == count) found[k] = *scan;
     }
+    ++count;
   }
   ReportLogIssues(*reader);
-  throw std::runtime_error(path + ": scan " + std::to_string(index) + " does not exist (the log has " +
-                           std::to_string(count) + " laser scans, indices 0.." +
-                           std::to_string(count - 1) + ")");
+  std::vector<LaserScan> scans;
+  for (std::size_t k = 0; k < indices.size(); ++k) {
+    if (!found[k]) {
+      while (reader->Next()) ++count;  // the whole count, for the message
+      throw std::runtime_error(path + ": scan " + std::to_string(indices[k]) +
+                               " does not exist (the log has " + std::to_string(count) +
+                               " laser scans, indices 0.." + std::to_string(count - 1) + ")");
+    }
+    scans.push_back(std::move(*found[k]));
+  }
+  return scans;
+}
+
+LaserScan ReadScanAt(const std::string& path, long long index, bool strict) {
+  return ReadScansAt(path, {index}, strict).front();
 }
 
 ShapeSlamParams LoadParamsForApp(const std::optional<std::string>& ini_path) {

@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "shape_slam/pipeline.h"
 #include "shape_slam/types.h"
@@ -28,6 +29,12 @@ std::unique_ptr<io::LogReader> OpenLogForApp(const std::string& path, bool stric
 /// Prints the reader's skipped records and oddities to stderr as warnings (at most 10 lines
 /// and a count).
 void ReportLogIssues(const io::LogReader& reader);
+
+/// The laser scans with the given 0-based indices (in that order), in one pass over the log.
+/// Throws std::runtime_error naming the log and how many scans it has when an index is out of
+/// range.
+std::vector<LaserScan> ReadScansAt(const std::string& path, const std::vector<long long>& indices,
+                                   bool strict);
 
 /// The laser scan with 0-based index `index` of the log. Throws std::runtime_error naming the
 /// log and how many scans it has when the index is out of range.

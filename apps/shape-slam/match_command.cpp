@@ -40,33 +40,6 @@ ArgParser MakeParser() {
   return parser;
 }
 
-// Loads scans I and J in one pass over the log.
-std::pair<LaserScan, LaserScan> ReadTwoScans(const std::string& path, long long i, long long j,
-                                             bool strict) {
-  if (i == j) {
-    const LaserScan scan = ReadScanAt(path, i, strict);
-    return {scan, scan};
-  }
-  const std::unique_ptr<io::LogReader> reader = OpenLogForApp(path, strict);
-  std::optional<LaserScan> scan_i, scan_j;
-  long long count = 0;
-  while (std::optional<LaserScan> scan = reader->Next()) {
-    if (count == i) scan_i = *scan;
-    if (count == j) scan_j = *scan;
-    ++count;
-    if (scan_i && scan_j) break;
-  }
-  ReportLogIssues(*reader);
-  for (const long long index : {i, j}) {
-    if (index >= count) {
-      throw std::runtime_error(path + ": scan " + std::to_string(index) +
-                               " does not exist (the log has " + std::to_string(count) +
-                               " laser scans, indices 0.." + std::to_string(count - 1) + ")");
-    }
-  }
-  return {*scan_i, *scan_j};
-}
-
 std::vector<Polyline> RobotFramePolylines(const LaserScan& scan, const Pose2& T_frame_robot,
                                           const ExtractionParams& params) {
   std::vector<Polyline> polylines = ExtractPolylines(scan, params);
@@ -94,7 +67,9 @@ int RunMatch(const Args& args) {
     guess = Pose2(v[0], v[1], v[2]);
   }
   const ShapeSlamParams params = LoadParamsForApp(parser.GetOptional("--config"));
-  const auto [scan_i, scan_j] = ReadTwoScans(parser.Get("LOG"), i, j, parser.Has("--strict"));
+  const std::vector<LaserScan> scans = ReadScansAt(parser.Get("LOG"), {i, j}, parser.Has("--strict"));
+  const LaserScan& scan_i = scans[0];
+  const LaserScan& scan_j = scans[1];
   const ScanMatchResult m = MatchScans(scan_i, scan_j, guess, params);
 
   if (const auto svg = parser.GetOptional("--svg")) {
