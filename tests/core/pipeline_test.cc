@@ -45,6 +45,17 @@ SimRun Simulate(unsigned seed) {
   Pose2 odom;
   Pose2 previous(corners[0].x(), corners[0].y(), 0.0);
   double t = 100.0;
+  // One scan at `next`, the odometry advanced by its noisy measurement of the step.
+  const auto record = [&](const Pose2& next, const Pose2& odometry_step) {
+    run.truth.push_back({t, next});
+    odom = odom * odometry_step;
+    LaserScan scan = testing::SimulateScan(world, next, testing::ScannerModel{}, prng);
+    scan.timestamp_s = t;
+    scan.T_odom_robot = odom;
+    run.scans.push_back(scan);
+    previous = next;
+    t += 0.1;
+  };
   for (int lap = 0; lap < 2; ++lap) {
     for (int c = 0; c < 4; ++c) {
       const Point2 a = corners[c], b = corners[(c + 1) % 4];
@@ -53,31 +64,17 @@ SimRun Simulate(unsigned seed) {
       while (std::abs(NormalizeAngle(heading - previous.theta)) > 1e-9) {
         const double turn = std::clamp(NormalizeAngle(heading - previous.theta), -0.15, 0.15);
         const Pose2 next(previous.x, previous.y, NormalizeAngle(previous.theta + turn));
-        run.truth.push_back({t, next});
         const Pose2 d = previous.Inverse() * next;
-        odom = odom * Pose2(d.x * 1.03, d.y, d.theta * 1.02 + 0.002 + 0.003 * n(prng));
-        LaserScan scan = testing::SimulateScan(world, next, testing::ScannerModel{}, prng);
-        scan.timestamp_s = t;
-        scan.T_odom_robot = odom;
-        run.scans.push_back(scan);
-        previous = next;
-        t += 0.1;
+        record(next, Pose2(d.x * 1.03, d.y, d.theta * 1.02 + 0.002 + 0.003 * n(prng)));
       }
       const double length = (b - a).norm();
       const int steps = static_cast<int>(std::ceil(length / 0.15));
       for (int k = 1; k <= steps; ++k) {
         const Point2 p = a + (b - a) * (static_cast<double>(k) / steps);
         const Pose2 next(p.x(), p.y(), heading);
-        run.truth.push_back({t, next});
         const Pose2 d = previous.Inverse() * next;
-        odom = odom * Pose2(d.x * 1.03 + 0.005 * n(prng), d.y + 0.005 * n(prng),
-                            d.theta + 0.004 + 0.003 * n(prng));
-        LaserScan scan = testing::SimulateScan(world, next, testing::ScannerModel{}, prng);
-        scan.timestamp_s = t;
-        scan.T_odom_robot = odom;
-        run.scans.push_back(scan);
-        previous = next;
-        t += 0.1;
+        record(next, Pose2(d.x * 1.03 + 0.005 * n(prng), d.y + 0.005 * n(prng),
+                           d.theta + 0.004 + 0.003 * n(prng)));
       }
     }
   }
