@@ -2,7 +2,8 @@
 //
 // Traversing the reflection points in the order the scanner measured them, an object
 // transition is present wherever two consecutive points are farther apart than a distance
-// threshold (the paper uses 20 cm) -- and wherever a beam gave no usable reading.
+// threshold (the paper uses 20 cm; we widen it with the range, see gap_beam_spacing_factor) --
+// and wherever a beam gave no usable reading.
 #pragma once
 
 #include <vector>
@@ -12,8 +13,13 @@
 namespace shape_slam {
 
 struct ExtractionParams {
-  /// Consecutive points farther apart than this start a new polyline, metres (§3.1: 0.20).
+  /// Consecutive points farther apart than this start a new polyline, metres (§3.1: 0.20) ...
   double max_gap_m = 0.20;
+  /// ... or, if larger, than this many times the beams' spacing at the nearer point's range
+  /// (range * angle between the beams). Beyond 10 m or so a 1 deg scanner's points on a wall lie
+  /// farther apart than 20 cm: a fixed threshold breaks the far walls, which are what tells a
+  /// robot where it is along a corridor, into single points that carry no shape. 0: off.
+  double gap_beam_spacing_factor = 2.5;
   /// Readings at or below this range are invalid, metres.
   double min_range_m = 0.02;
   /// Polylines with fewer points are dropped (isolated returns carry no shape).

@@ -30,7 +30,6 @@ struct Group {
 std::vector<Group> GroupPoints(const LaserScan& scan, const ExtractionParams& params) {
   std::vector<Group> groups;
   bool open = false;
-  const double max_gap2 = params.max_gap_m * params.max_gap_m;
   for (std::size_t i = 0; i < scan.ranges_m.size(); ++i) {
     const double r = scan.ranges_m[i];
     if (!IsValidReading(r, scan.angles_rad[i], scan, params)) {
@@ -38,7 +37,13 @@ std::vector<Group> GroupPoints(const LaserScan& scan, const ExtractionParams& pa
       continue;
     }
     const Point2 p(r * std::cos(scan.angles_rad[i]), r * std::sin(scan.angles_rad[i]));
-    if (!open || (p - groups.back().points.back()).squaredNorm() > max_gap2) {
+    double max_gap = params.max_gap_m;
+    if (open) {  // the previous beam was valid and is the last point
+      const double spacing = std::min(r, scan.ranges_m[i - 1]) *
+                             std::abs(scan.angles_rad[i] - scan.angles_rad[i - 1]);
+      max_gap = std::max(max_gap, params.gap_beam_spacing_factor * spacing);
+    }
+    if (!open || (p - groups.back().points.back()).squaredNorm() > max_gap * max_gap) {
       groups.push_back({i, i, {}});
       open = true;
     }
@@ -70,6 +75,9 @@ void ExtractionParams::Validate() const {
     throw std::invalid_argument("ExtractionParams::min_range_m must be >= 0");
   }
   if (min_points < 1) throw std::invalid_argument("ExtractionParams::min_points must be >= 1");
+  if (!(gap_beam_spacing_factor >= 0.0) || !std::isfinite(gap_beam_spacing_factor)) {
+    throw std::invalid_argument("ExtractionParams::gap_beam_spacing_factor must be >= 0");
+  }
 }
 
 std::vector<Polyline> ExtractPolylines(const LaserScan& scan, const ExtractionParams& params) {

@@ -49,12 +49,38 @@ TEST(PolylineExtractionTest, GapThresholdAndMinPoints) {
   scan.ranges_m = {1.0, 1.0, 1.0};
   const double a = 2 * std::asin(0.19 / 2.0), b = 2 * std::asin(0.21 / 2.0);
   scan.angles_rad = {0.0, a, a + b};
-  const std::vector<Polyline> p = ExtractPolylines(scan, ExtractionParams{});
+  ExtractionParams fixed_gap;
+  fixed_gap.gap_beam_spacing_factor = 0.0;  // the paper's rule alone
+  const std::vector<Polyline> p = ExtractPolylines(scan, fixed_gap);
   ASSERT_EQ(p.size(), 1u);
   EXPECT_EQ(p[0].size(), 2u);
-  ExtractionParams keep_singletons;
+  ExtractionParams keep_singletons = fixed_gap;
   keep_singletons.min_points = 1;
   EXPECT_EQ(ExtractPolylines(scan, keep_singletons).size(), 2u);
+}
+
+// A wall 20 m away seen by a 1 deg scanner: its points lie 0.35 m apart, yet it is one
+// polyline; near the sensor the 20 cm rule still splits.
+TEST(PolylineExtractionTest, GapThresholdGrowsWithTheBeamSpacing) {
+  const double step = M_PI / 180.0;
+  LaserScan far;
+  far.max_range_m = 50;
+  for (int i = -5; i <= 5; ++i) {
+    far.angles_rad.push_back(i * step);
+    far.ranges_m.push_back(20.0 / std::cos(i * step));  // the wall x = 20
+  }
+  const std::vector<Polyline> wall = ExtractPolylines(far, ExtractionParams{});
+  ASSERT_EQ(wall.size(), 1u);
+  EXPECT_EQ(wall[0].size(), 11u);
+  ExtractionParams fixed_gap;
+  fixed_gap.gap_beam_spacing_factor = 0.0;
+  EXPECT_TRUE(ExtractPolylines(far, fixed_gap).empty());  // every point alone, dropped
+
+  LaserScan near;  // two objects at 1 m, 0.3 m apart between beams 1 deg apart: split
+  near.max_range_m = 50;
+  near.angles_rad = {0.0, step, 2 * step, 3 * step};
+  near.ranges_m = {1.0, 1.0, 1.3, 1.3};
+  EXPECT_EQ(ExtractPolylines(near, ExtractionParams{}).size(), 2u);
 }
 
 TEST(PolylineExtractionTest, FullCircleJoinsAcrossTheSeam) {
