@@ -79,6 +79,13 @@ int RunEval(const Args& args) {
   std::vector<Relation> relations;
   if (const auto path = parser.GetOptional("RELATIONS")) relations = io::ReadRelations(*path);
   const EvaluationResult result = EvaluateTrajectory(estimate, reference, relations, params);
+  // Scores over a small part of the reference say little about the trajectory as a whole.
+  constexpr double kMinAssociatedFraction = 0.9;
+  if (result.matched_poses < kMinAssociatedFraction * result.reference_poses) {
+    std::cerr << "warning: only " << result.matched_poses << " of " << result.reference_poses
+              << " reference poses were associated with the trajectory (timestamps within "
+              << params.max_time_difference_s << " s): the figures cover only those\n";
+  }
   std::cout << (parser.Has("--json") ? Json(result) : Text(result, !relations.empty()));
   return 0;
 }

@@ -100,8 +100,38 @@ std::size_t GridBytes(const PolylineMap& map, double resolution_m) {
          static_cast<std::size_t>(std::ceil(size.y() / resolution_m) + 1);
 }
 
+// A run in which fewer scans than this found a trusted match is reported with a warning: the
+// map is likely inconsistent from where matching failed.
+constexpr double kMinMatchedFraction = 0.9;
+
+double MatchedFraction(const RunOutput& out) {
+  return out.trajectory.empty() ? 0.0
+                                : static_cast<double>(out.matched) / out.trajectory.size();
+}
+
+// What the user must know about the run on stderr: odometry that was not there, and a run in
+// which matching failed too often to trust the map.
+void ReportRunIssues(const RunOutput& out, const OdometryReport& odometry, bool requested) {
+  if (requested && odometry.status == OdometryStatus::kAbsent) {
+    std::cerr << "note: the log has no odometry: mapped by shape alone (as with --no-odometry)\n";
+  } else if (requested && odometry.status == OdometryStatus::kConstant) {
+    std::cerr << "note: the log's odometry never changes (" << odometry.scans_with_odometry
+              << " scans, every pose equal to the first): treated as absent, mapped by shape "
+                 "alone (as with --no-odometry)\n";
+  } else if (requested && odometry.scans_predicted + 1 < odometry.scans) {
+    std::cerr << "note: " << odometry.scans - odometry.scans_predicted - 1 << " of "
+              << odometry.scans << " scans had no moving odometry and were matched by shape alone\n";
+  }
+  if (MatchedFraction(out) < kMinMatchedFraction) {
+    std::cerr << std::fixed << std::setprecision(1) << "warning: only " << out.matched << " of "
+              << out.trajectory.size() << " scans (" << 100.0 * MatchedFraction(out)
+              << " %) found a trusted match; the map may be inconsistent where matching failed\n";
+  }
+}
+
 std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t map_file_bytes,
-                      double wall_s, const io::LogReader& reader, const ShapeSlamParams& params) {
+                      double wall_s, const io::LogReader& reader, const ShapeSlamParams& params,
+                      const OdometryReport& odometry) {
   io::JsonWriter json;
   json.BeginObject().Key("scans").Value(out.trajectory.size());
   json.Key("wall_s").Value(wall_s).Key("processing_s").Value(out.processing_s);
@@ -119,8 +149,13 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
       .Value(Percentile({out.scan_ms.end() - tenth, out.scan_ms.end()}, 0.5))
       .EndObject();
   json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(out.keyframes);
+  json.Key("matched_fraction").Value(MatchedFraction(out));
+  json.Key("low_match_warning").Value(MatchedFraction(out) < kMinMatchedFraction);
   json.Key("loop_closures").Value(out.loop_closures);
-  json.Key("odometry").Value(params.use_odometry);
+  json.Key("odometry").BeginObject().Key("requested").Value(params.use_odometry);
+  json.Key("status").Value(ToString(odometry.status));
+  json.Key("scans_with_odometry").Value(odometry.scans_with_odometry);
+  json.Key("scans_predicted").Value(odometry.scans_predicted).EndObject();
   json.Key("map").BeginObject();
   json.Key("polylines").Value(map.NumPolylines()).Key("vertices").Value(map.NumVertices());
   json.Key("bytes").Value(map_file_bytes).Key("memory_bytes").Value(map.GeometryBytes());
@@ -190,9 +225,10 @@ int RunRun(const Args& args) {
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const std::string stats =
-      StatsJson(out, slam.Map(), map_text.size(), wall_s, *reader, params);
+      StatsJson(out, slam.Map(), map_text.size(), wall_s, *reader, params, slam.Odometry());
   WriteOutputs(out_dir, out, slam.Map(), stats, map_text,
                std::filesystem::path(log).filename().string());
+  ReportRunIssues(out, slam.Odometry(), params.use_odometry);
   if (!quiet) {
     std::cout << std::fixed << std::setprecision(2) << "mapped " << out.trajectory.size()
               << " scans in " << out.processing_s << " s (median "

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "shape_slam/alignment_refinement.h"
+#include "shape_slam/candidate_selection.h"
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
 #include "shape_slam/polyline_extraction.h"
@@ -27,6 +28,7 @@
 #include "shape_slam/pose_graph.h"
 #include "shape_slam/shape_matcher.h"
 #include "shape_slam/visibility.h"
+#include "shape_slam/window_search.h"
 
 namespace shape_slam {
 
@@ -113,6 +115,18 @@ struct ShapeSlamParams {
   /// The visible map shape covers the scan's field of view widened by this on each side, rad.
   double visibility_fov_margin_rad = 0.35;
   ShapeMatcherParams matcher;        ///< §4.2-§4.3 and the §5.1 ICP
+  /// The choice among a scan's candidate poses (shape matches, window search, prediction).
+  CandidateSelectionParams selection;
+  /// Without odometry, the window around the constant-velocity prediction is searched for the
+  /// poses where the scan fits the local model (window_search.h); they join the candidates.
+  WindowSearchParams window_search;
+  bool window_search_without_odometry = true;
+  /// With odometry, the window search runs only for a scan that found no trusted match, in a
+  /// window this many times smaller (the odometry prediction is close).
+  bool window_search_fallback = true;
+  double window_search_odometry_scale = 0.5;
+  /// The window search scores samples of the scan every this many metres.
+  double window_search_spacing_m = 0.2;
   RefinementParams refinement;       ///< Ceres refinement after the restricted ICP
   /// The refinement against the whole visible map first runs with this wider association gate
   /// (metres), so that it converges from odometry-size errors, then with refinement's own.
@@ -133,6 +147,17 @@ struct ShapeSlamParams {
   /// jumps there between two scans. Generous on purpose: logs scanned every second or two.
   double max_motion_per_scan_m = 1.5;
   double max_turn_per_scan_rad = 1.2;
+  /// Without odometry, candidates are ranked by fit less a constant-velocity motion prior
+  /// (CandidateSelectionParams::prior_*): between fits that differ little, as along a
+  /// corridor, the motion nearer the last one wins. With odometry the prior comes from the
+  /// odometry noise model instead.
+  double motion_prior_weight = 0.03;
+  double motion_prior_sigma_m = 0.5;     ///< metres
+  double motion_prior_sigma_rad = 0.5;   ///< radians
+  /// Without odometry, after k consecutive scans without a trusted match the motion bound and
+  /// the search window grow by 1 + k, up to this factor (the robot went on while we were lost);
+  /// such scans are placed at the constant-velocity prediction.
+  double max_lost_growth = 3.0;
   /// With odometry, an estimate farther than this many standard deviations (Mahalanobis, of
   /// the odometry noise model) from the prediction is rejected as a false match.
   double max_prior_mahalanobis = 4.0;
@@ -153,6 +178,27 @@ struct ShapeSlamParams {
 
   void Validate() const;
 };
+
+/// What the mapper made of the log's odometry so far. Real logs come without odometry (no
+/// odometry at all, or every pose zero): odometry that has never moved since the first scan is
+/// treated as absent, and such scans are matched by shape alone (§4.3), as with use_odometry =
+/// false. Once it moves it predicts every later scan.
+enum class OdometryStatus {
+  kDisabled,  ///< ShapeSlamParams::use_odometry is false
+  kAbsent,    ///< no scan carried an odometry pose
+  kConstant,  ///< every scan's odometry pose equals the first one's
+  kUsed,      ///< the odometry moved; it predicts the poses from then on
+};
+
+struct OdometryReport {
+  OdometryStatus status = OdometryStatus::kAbsent;
+  int scans = 0;                   ///< scans processed
+  int scans_with_odometry = 0;     ///< of which carried an odometry pose
+  int scans_predicted = 0;         ///< of which were predicted by odometry
+};
+
+/// A short name for the status: "disabled", "absent", "constant", "used".
+const char* ToString(OdometryStatus status);
 
 /// What the mapper did with one scan.
 struct ScanReport {
@@ -189,6 +235,8 @@ class ShapeSlam {
   const PoseGraph& Graph() const { return graph_; }
   /// Loop-closure edges accepted so far.
   int NumLoopClosures() const { return num_loop_closures_; }
+  /// Whether the log's odometry was used (see OdometryStatus).
+  const OdometryReport& Odometry() const { return odometry_; }
 
  private:
   struct Prediction {
@@ -208,6 +256,7 @@ class ShapeSlam {
     int keyframe = 0;
     Pose2 T_keyframe_robot;
   };
+  void TrackOdometry(const LaserScan& scan);
   Prediction Predict(const LaserScan& scan) const;
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
@@ -236,8 +285,11 @@ class ShapeSlam {
   std::optional<Pose2> last_T_map_robot_;
   std::optional<Pose2> previous_T_map_robot_;  // the one before last, for constant velocity
   std::optional<Pose2> last_T_odom_robot_;
+  std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
+  OdometryReport odometry_;
   double travel_m_ = 0.0;
   int num_loop_closures_ = 0;
+  int lost_scans_ = 0;  // consecutive scans without a trusted match
   std::optional<LoopEdge> pending_loop_;
 };
 

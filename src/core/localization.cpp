@@ -8,18 +8,13 @@
 #include <utility>
 
 #include "shape_slam/alignment.h"
+#include "shape_slam/candidate_selection.h"
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/polyline_extraction.h"
 #include "shape_slam/shape_matcher.h"
 
 namespace shape_slam::internal {
 namespace {
-
-// Point-to-point ICP steps that finish each candidate before they are compared.
-constexpr int kCandidateIcpIterations = 8;
-
-// Inlier ratios closer than this count as equally good fits.
-constexpr double kEquallyGoodFit = 0.05;
 
 // DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
 // the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
@@ -38,10 +33,10 @@ bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma
 }
 
 // Without odometry: whether a correction of the prediction (the last pose) implies a motion a
-// robot can make between two scans.
-bool WithinMotionBound(const Pose2& correction, const ShapeSlamParams& params) {
-  return correction.Translation().norm() <= params.max_motion_per_scan_m &&
-         std::abs(correction.theta) <= params.max_turn_per_scan_rad;
+// robot can make between two scans (`growth` times more after scans without a match).
+bool WithinMotionBound(const Pose2& correction, double growth, const ShapeSlamParams& params) {
+  return correction.Translation().norm() <= growth * params.max_motion_per_scan_m &&
+         std::abs(correction.theta) <= std::min(M_PI, growth * params.max_turn_per_scan_rad);
 }
 
 // Shape matching (§4.2, §4.3) of the scan against one model; its alignment is a candidate.
@@ -122,30 +117,37 @@ double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGr
   return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
 }
 
-// Candidates from shape matching against the map and against the last keyframe, and the
-// prediction itself, are each refined against both; the one explaining most of the scan wins.
-// Finishes every candidate by quick ICP against the local model and ranks them by their fit.
-std::vector<std::pair<double, Pose2>> RankCandidates(const std::vector<Pose2>& candidates,
-                                                     const std::vector<Point2>& samples,
-                                                     const ModelIcp& icp,
-                                                     const std::optional<PosePrior>& prior,
-                                                     const ShapeSlamParams& params) {
-  std::vector<std::pair<double, Pose2>> ranked;
-  for (const Pose2& candidate : candidates) {
-    const Pose2 aligned = icp.Align(samples, candidate, kCandidateIcpIterations);
-    if (prior && !WithinPrior(aligned, *prior, params.max_prior_mahalanobis)) continue;
-    if (!prior && !WithinMotionBound(aligned, params)) continue;
-    ranked.emplace_back(icp.InlierRatio(samples, aligned), aligned);
-  }
-  std::stable_sort(ranked.begin(), ranked.end(),
-                   [](const auto& a, const auto& b) { return a.first > b.first; });
-  return ranked;
+std::vector<Point2> Thinned(const std::vector<Point2>& samples, double from_m, double to_m) {
+  const int every = std::max(1, static_cast<int>(std::lround(to_m / from_m)));
+  std::vector<Point2> thinned;
+  for (std::size_t i = 0; i < samples.size(); i += every) thinned.push_back(samples[i]);
+  return thinned;
 }
 
+// The window search's hypotheses around a centre, in a window scaled by `scale`.
+std::vector<Pose2> WindowCandidates(const std::vector<Polyline>& model,
+                                    const std::vector<Point2>& samples, const Pose2& centre,
+                                    double scale, const ShapeSlamParams& params) {
+  WindowSearchParams window = params.window_search;
+  window.half_window_m *= scale;
+  window.half_window_rad *= scale;
+  const WindowSearch search(model, window);
+  std::vector<Pose2> candidates;
+  const std::vector<Point2> coarse =
+      Thinned(samples, params.matcher.alignment.sample_spacing_m, params.window_search_spacing_m);
+  for (const WindowHypothesis& h : search.Search(coarse, centre)) candidates.push_back(h.T_model_scan);
+  return candidates;
+}
+
+// Candidates from shape matching against the visible map and the last keyframe (§4.2, §4.3),
+// the prediction and, without odometry, the hints and the window search; the candidate
+// selection ranks them and the first that the Ceres refinement and the gates accept wins.
 Localization Localize(const Shapes& shapes, const LocalModel& model,
                       const std::optional<Pose2>& odometry_delta,
-                      const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params) {
+                      const std::optional<Pose2>& velocity_hint, int lost_scans,
+                      const ShapeSlamParams& params) {
   Localization loc;
+  const double growth = odometry_delta ? 1.0 : std::min(1.0 + lost_scans, params.max_lost_growth);
   std::optional<Pose2> guess;
   std::optional<PosePrior> prior;
   if (odometry_delta) {
@@ -157,10 +159,23 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   const std::vector<Point2> samples =
       AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
   if (samples.empty() || all.empty()) return loc;
-  const ModelIcp icp(all, params.coarse_gate_m, params.matcher.inlier_distance_m);
-  // Shape matching against the visible map and the last keyframe; the candidates, finished by
-  // ICP, ranked by fit; the best one that the Ceres refinement accepts wins.
-  const auto localize = [&](const ShapeMatcherParams& matcher) {
+  CandidateSelectionParams selection = params.selection;
+  selection.capture_distance_m = params.coarse_gate_m;
+  selection.inlier_distance_m = params.matcher.inlier_distance_m;
+  if (!odometry_delta) {
+    selection.prior_weight = params.motion_prior_weight;
+    selection.prior_sigma_m = growth * params.motion_prior_sigma_m;
+    selection.prior_sigma_rad = growth * params.motion_prior_sigma_rad;
+  }
+  const CandidateSelector selector(all, selection);
+  // Between equally good fits the one nearest the prediction (with odometry) or the
+  // constant-velocity extrapolation (without) wins.
+  const Pose2 reference = guess.value_or(velocity_hint.value_or(Pose2()));
+  const auto accept = [&](const Pose2& T) {
+    return prior ? WithinPrior(T, *prior, params.max_prior_mahalanobis)
+                 : WithinMotionBound(T, growth, params);
+  };
+  const auto localize = [&](const ShapeMatcherParams& matcher, double window_scale) {
     ShapeSlamParams p = params;
     p.matcher = matcher;
     std::vector<Pose2> candidates;
@@ -172,31 +187,46 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
       }
     }
     if (guess) candidates.push_back(*guess);
-    for (const auto& [ratio, aligned] : RankCandidates(candidates, samples, icp, prior, params)) {
-      const RefinementResult refined =
-          RefineAlignment(samples, all, aligned, prior, params.refinement);
-      if (!refined.converged) continue;
-      if (prior && !WithinPrior(refined.T_map_scan, *prior, params.max_prior_mahalanobis)) continue;
-      if (!prior && !WithinMotionBound(refined.T_map_scan, params)) continue;
-      loc.correction = refined.T_map_scan;
-      loc.covariance = refined.covariance;
-      loc.rms_error_m = refined.rms_error_m;
-      loc.inlier_ratio = icp.InlierRatio(samples, refined.T_map_scan);
-      loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
-      break;
+    if (!guess) {
+      candidates.push_back(Pose2());  // the robot did not move
+      if (velocity_hint) candidates.push_back(*velocity_hint);
     }
+    if (window_scale > 0.0) {
+      for (const Pose2& c : WindowCandidates(all, samples, reference, window_scale, params)) {
+        candidates.push_back(c);
+      }
+    }
+    const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+      RefinementResult refined = RefineAlignment(samples, all, c.T_model_scan, prior, params.refinement);
+      if (!refined.converged || !accept(refined.T_map_scan)) return std::nullopt;
+      return refined;
+    };
+    const auto selected = SelectRefined<RefinementResult>(
+        selector.Rank(samples, candidates, reference, accept), selection.max_refinements, refine);
+    if (!selected) return;
+    const RefinementResult& refined = selected->second;
+    loc.correction = refined.T_map_scan;
+    loc.covariance = refined.covariance;
+    loc.rms_error_m = refined.rms_error_m;
+    loc.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
+    loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
   };
-  localize(params.matcher);
-  // Without odometry nothing else says where the robot went: a scan that found no trusted match
-  // tries again with as many seed pairs as scan-to-scan matching uses (scan_match_*), which
-  // costs about twice as much and is needed only for the odd scan.
+  const bool window_now = !odometry_delta && params.window_search_without_odometry;
+  localize(params.matcher, window_now ? growth : 0.0);
+  // A scan that found no trusted match tries again: without odometry with as many seed pairs
+  // as scan-to-scan matching uses (scan_match_*), with odometry with the window search around
+  // the prediction (window_search_fallback). Needed only for the odd scan.
   if (!loc.trusted && !odometry_delta) {
     ShapeMatcherParams thorough = params.matcher;
     thorough.max_seed_pairs = params.scan_match_seed_pairs;
     thorough.num_seeds = params.scan_match_seeds;
-    localize(thorough);
+    localize(thorough, window_now ? growth : 0.0);
+  } else if (!loc.trusted && params.window_search_fallback) {
+    localize(params.matcher, params.window_search_odometry_scale);
   }
-  if (!loc.trusted) loc.correction = Pose2();
+  // Unconfirmed: the prediction, which without odometry is the constant-velocity one (a robot
+  // that was moving most likely still is).
+  if (!loc.trusted) loc.correction = odometry_delta ? Pose2() : velocity_hint.value_or(Pose2());
   const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
   loc.coverage = InlierRatio(samples, near, loc.correction);
   return loc;
@@ -222,24 +252,24 @@ std::optional<KeyframeMatch> MatchKeyframe(const Shapes& scan, const Shapes& key
   const std::vector<Point2> samples = AlignmentSamples(scan.fine, spacing);
   const std::vector<Point2> keyframe_samples = AlignmentSamples(keyframe.fine, spacing);
   if (samples.empty() || keyframe_samples.empty()) return std::nullopt;
-  const SegmentGrid keyframe_grid(MakeModelSegments(keyframe.fine), params.matcher.inlier_distance_m);
+  CandidateSelectionParams selection = params.selection;
+  selection.capture_distance_m = params.coarse_gate_m;
+  selection.inlier_distance_m = params.matcher.inlier_distance_m;
+  const CandidateSelector selector(keyframe.fine, selection);
   // Among fits that explain the scan about equally well, the one nearest the estimate wins:
   // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
+  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    RefinementResult refined = RefineAgainstMap(samples, keyframe.fine, c.T_model_scan, std::nullopt, params);
+    if (!refined.converged) return std::nullopt;
+    return refined;
+  };
+  const auto selected = SelectRefined<RefinementResult>(
+      selector.Rank(samples, candidates, T_keyframe_scan_estimate), selection.max_refinements, refine);
   std::optional<KeyframeMatch> best;
-  double best_distance = 0.0;
-  for (const Pose2& candidate : candidates) {
-    const RefinementResult refined =
-        RefineAgainstMap(samples, keyframe.fine, candidate, std::nullopt, params);
-    if (!refined.converged) continue;
-    const double ratio = InlierRatio(samples, keyframe_grid, refined.T_map_scan);
-    const Pose2 d = T_keyframe_scan_estimate.Inverse() * refined.T_map_scan;
-    const double distance = d.Translation().norm() + std::abs(d.theta);  // m + rad
-    const bool better =
-        !best || ratio > best->inlier_ratio + kEquallyGoodFit ||
-        (ratio > best->inlier_ratio - kEquallyGoodFit && distance < best_distance);
-    if (!better) continue;
-    best = KeyframeMatch{refined.T_map_scan, refined.covariance, ratio, 0.0};
-    best_distance = distance;
+  if (selected) {
+    const RefinementResult& refined = selected->second;
+    best = KeyframeMatch{refined.T_map_scan, refined.covariance,
+                         selector.Fit(samples, refined.T_map_scan), 0.0};
   }
   if (best) {
     const SegmentGrid scan_grid(MakeModelSegments(scan.fine), params.matcher.inlier_distance_m);

@@ -100,6 +100,16 @@ void ShapeSlamParams::Validate() const {
   Positive(max_prior_mahalanobis, "ShapeSlamParams::max_prior_mahalanobis");
   Positive(max_motion_per_scan_m, "ShapeSlamParams::max_motion_per_scan_m");
   Positive(max_turn_per_scan_rad, "ShapeSlamParams::max_turn_per_scan_rad");
+  NonNegative(motion_prior_weight, "ShapeSlamParams::motion_prior_weight");
+  Positive(motion_prior_sigma_m, "ShapeSlamParams::motion_prior_sigma_m");
+  Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
+  if (!(max_lost_growth >= 1.0) || !std::isfinite(max_lost_growth)) {
+    throw std::invalid_argument("ShapeSlamParams::max_lost_growth must be >= 1");
+  }
+  selection.Validate();
+  window_search.Validate();
+  Positive(window_search_odometry_scale, "ShapeSlamParams::window_search_odometry_scale");
+  Positive(window_search_spacing_m, "ShapeSlamParams::window_search_spacing_m");
   if (scan_match_seed_pairs < 1 || scan_match_seeds < 1) {
     throw std::invalid_argument(
         "ShapeSlamParams::scan_match_seed_pairs and scan_match_seeds must be >= 1");
@@ -136,16 +146,43 @@ void LoopClosureParams::Validate() const {
   graph.Validate();
 }
 
+const char* ToString(OdometryStatus status) {
+  switch (status) {
+    case OdometryStatus::kDisabled: return "disabled";
+    case OdometryStatus::kAbsent: return "absent";
+    case OdometryStatus::kConstant: return "constant";
+    case OdometryStatus::kUsed: return "used";
+  }
+  return "unknown";
+}
+
 ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
     : params_(params), map_(params.index_cell_size_m) {
   params_.Validate();
+  if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
+}
+
+// Odometry that has not moved since the first scan is no odometry (logs without any carry
+// zeros): until it moves, scans are matched by shape alone.
+void ShapeSlam::TrackOdometry(const LaserScan& scan) {
+  ++odometry_.scans;
+  if (!scan.T_odom_robot) return;
+  ++odometry_.scans_with_odometry;
+  if (!first_T_odom_robot_) first_T_odom_robot_ = scan.T_odom_robot;
+  if (odometry_.status == OdometryStatus::kDisabled || odometry_.status == OdometryStatus::kUsed) {
+    return;
+  }
+  const Pose2 moved = first_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+  constexpr double kUnchanged = 1e-9;  // metres, radians: the same pose up to rounding
+  const bool unchanged = moved.Translation().norm() <= kUnchanged && std::abs(moved.theta) <= kUnchanged;
+  odometry_.status = unchanged ? OdometryStatus::kConstant : OdometryStatus::kUsed;
 }
 
 ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
   Prediction prediction;
   if (!last_T_map_robot_) return prediction;  // the first scan defines the map frame
   prediction.T_map_robot = *last_T_map_robot_;
-  if (params_.use_odometry && scan.T_odom_robot && last_T_odom_robot_) {
+  if (odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot && last_T_odom_robot_) {
     const Pose2 delta = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
     prediction.odometry_delta = delta;
     prediction.T_map_robot = *last_T_map_robot_ * delta;
@@ -346,8 +383,10 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.timestamp_s = scan.timestamp_s;
   internal::Shapes shapes = internal::ExtractShapes(scan, params_);
   report.polylines = static_cast<int>(shapes.coarse.size());
+  TrackOdometry(scan);
   const Prediction prediction = Predict(scan);
   report.used_odometry = prediction.odometry_delta.has_value();
+  odometry_.scans_predicted += report.used_odometry ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
 
   internal::Localization loc;
@@ -372,11 +411,13 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
       velocity_hint = scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity *
                       scan.T_robot_sensor;
     }
-    loc = internal::Localize(shapes, model, prediction.odometry_delta, velocity_hint, params_);
+    loc = internal::Localize(shapes, model, prediction.odometry_delta, velocity_hint, lost_scans_,
+                             params_);
   }
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
+  lost_scans_ = loc.trusted || map_.Empty() ? 0 : lost_scans_ + 1;
   report.covariance = loc.covariance;
   report.matched_pairs = loc.matched_pairs;
   report.inlier_ratio = loc.inlier_ratio;

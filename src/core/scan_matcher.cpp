@@ -5,19 +5,11 @@
 #include <vector>
 
 #include "shape_slam/internal/localization.h"
-#include "shape_slam/internal/model_icp.h"
+#include "shape_slam/candidate_selection.h"
 #include "shape_slam/shape_matcher.h"
+#include "shape_slam/window_search.h"
 
 namespace shape_slam {
-namespace {
-
-// Point-to-point ICP steps that finish each candidate before they are compared.
-constexpr int kCandidateIcpIterations = 8;
-
-// Inlier ratios closer than this count as equally good fits.
-constexpr double kEquallyGoodFit = 0.05;
-
-}  // namespace
 
 ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
                            const std::optional<Pose2>& guess_T_i_j,
@@ -67,44 +59,44 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
     if (!use_guess) result.reliability = match.reliability;
   }
   if (guess) candidates.push_back(*guess);
-  if (candidates.empty()) return result;
-
-  // Each candidate finished by quick ICP and ranked by how much of scan J it explains; the
-  // best one that the Ceres refinement accepts wins.
-  const internal::ModelIcp icp(shapes_i.fine, params.coarse_gate_m,
-                               params.matcher.inlier_distance_m);
   // Among fits explaining the scan about equally well, the one nearest the guess (or the
   // smaller motion) wins: repetitive places offer look-alike fits farther away.
   const Pose2 reference = guess.value_or(to_sensor(Pose2()));
-  const auto distance = [&](const Pose2& T) {
-    const Pose2 d = reference.Inverse() * T;
-    return d.Translation().norm() + std::abs(d.theta);  // m + rad
+  candidates.push_back(reference);
+  // The window around the reference, all turns included: where scan J fits scan I at all.
+  WindowSearchParams window = params.window_search;
+  window.half_window_rad = M_PI;
+  const WindowSearch search(shapes_i.fine, window);
+  const std::vector<Point2> coarse = internal::Thinned(
+      samples, params.matcher.alignment.sample_spacing_m, params.window_search_spacing_m);
+  for (const WindowHypothesis& h : search.Search(coarse, reference)) candidates.push_back(h.T_model_scan);
+
+  // Each candidate finished by quick ICP and ranked by how much of scan J it explains; the
+  // best one that the Ceres refinement accepts wins.
+  CandidateSelectionParams selection = params.selection;
+  selection.capture_distance_m = params.coarse_gate_m;
+  selection.inlier_distance_m = params.matcher.inlier_distance_m;
+  const CandidateSelector selector(shapes_i.fine, selection);
+  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    RefinementResult refined =
+        internal::RefineAgainstMap(samples, shapes_i.fine, c.T_model_scan, std::nullopt, params);
+    if (!refined.converged) return std::nullopt;
+    return refined;
   };
-  std::vector<std::pair<double, Pose2>> ranked;
-  for (const Pose2& candidate : candidates) {
-    const Pose2 aligned = icp.Align(samples, candidate, kCandidateIcpIterations);
-    ranked.emplace_back(icp.InlierRatio(samples, aligned), aligned);
-  }
-  std::stable_sort(ranked.begin(), ranked.end(), [&](const auto& a, const auto& b) {
-    if (std::abs(a.first - b.first) > kEquallyGoodFit) return a.first > b.first;
-    return distance(a.second) < distance(b.second);
-  });
-  for (const auto& [ratio, aligned] : ranked) {
-    const RefinementResult refined =
-        internal::RefineAgainstMap(samples, shapes_i.fine, aligned, std::nullopt, params);
-    if (!refined.converged) continue;
-    result.T_i_j = to_robot(refined.T_map_scan);
-    // Covariance of the robot pose: the sensor offsets are constant, so it transforms with the
-    // rotation of scan I's sensor on the robot.
-    Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-    J.topLeftCorner<2, 2>() = scan_i.T_robot_sensor.Rotation();
-    result.covariance = J * refined.covariance * J.transpose();
-    result.iterations = refined.iterations;
-    result.rms_error_m = refined.rms_error_m;
-    result.inlier_ratio = icp.InlierRatio(samples, refined.T_map_scan);
-    result.converged = result.inlier_ratio >= params.min_inlier_ratio;
-    break;
-  }
+  const auto selected = SelectRefined<RefinementResult>(
+      selector.Rank(samples, candidates, reference), selection.max_refinements, refine);
+  if (!selected) return result;
+  const RefinementResult& refined = selected->second;
+  result.T_i_j = to_robot(refined.T_map_scan);
+  // Covariance of the robot pose: the sensor offsets are constant, so it transforms with the
+  // rotation of scan I's sensor on the robot.
+  Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
+  J.topLeftCorner<2, 2>() = scan_i.T_robot_sensor.Rotation();
+  result.covariance = J * refined.covariance * J.transpose();
+  result.iterations = refined.iterations;
+  result.rms_error_m = refined.rms_error_m;
+  result.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
+  result.converged = result.inlier_ratio >= params.min_inlier_ratio;
   return result;
 }
 

@@ -28,6 +28,9 @@ Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& param
 /// Samples of the alignment polylines every spacing_m (§5.1).
 std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m);
 
+/// Every k-th sample, k = to_m / from_m: samples spaced from_m apart thinned to about to_m.
+std::vector<Point2> Thinned(const std::vector<Point2>& samples, double from_m, double to_m);
+
 /// Covariance of an odometry increment T_prev_cur under the noise model.
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
 
@@ -62,11 +65,14 @@ struct Localization {
   double coverage = 0.0;  ///< fraction of the scan within new_territory_distance_m of the model
 };
 
-/// Candidates from shape matching against the map and against the last keyframe, and the
-/// prediction itself, each refined against both; the one explaining most of the scan wins.
+/// Candidates from shape matching against the map and against the last keyframe, the
+/// prediction and (without odometry) the window search, ranked by the candidate selection and
+/// refined in that order. `lost_scans`: consecutive scans before this one that found no trusted
+/// match; without odometry the motion bound, the prior and the window grow with it.
 Localization Localize(const Shapes& shapes, const LocalModel& model,
                       const std::optional<Pose2>& odometry_delta,
-                      const std::optional<Pose2>& velocity_hint, const ShapeSlamParams& params);
+                      const std::optional<Pose2>& velocity_hint, int lost_scans,
+                      const ShapeSlamParams& params);
 
 /// A scan matched against one keyframe's shapes (a loop closure candidate).
 struct KeyframeMatch {
