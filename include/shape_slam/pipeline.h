@@ -152,6 +152,8 @@ struct ShapeSlamParams {
   /// corridor, the motion nearer the last one wins. With odometry the prior comes from the
   /// odometry noise model instead.
   double motion_prior_weight = 0.03;
+  /// The constant-velocity prediction is the mean motion of this many last scans.
+  int velocity_window = 3;
   double motion_prior_sigma_m = 0.5;     ///< metres
   double motion_prior_sigma_rad = 0.5;   ///< radians
   /// Without odometry, after k consecutive scans without a trusted match the motion bound and
@@ -283,7 +285,7 @@ class ShapeSlam {
   std::vector<Keyframe> keyframes_;
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
-  std::optional<Pose2> previous_T_map_robot_;  // the one before last, for constant velocity
+  std::vector<Pose2> recent_motions_;  // T_prev_cur of the last scans, for constant velocity
   std::optional<Pose2> last_T_odom_robot_;
   std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
   OdometryReport odometry_;

@@ -171,6 +171,13 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   // Between equally good fits the one nearest the prediction (with odometry) or the
   // constant-velocity extrapolation (without) wins.
   const Pose2 reference = guess.value_or(velocity_hint.value_or(Pose2()));
+  // Without odometry, the constant-velocity motion is a weak prior of the refinement: it
+  // decides only the directions the scan leaves unconstrained (along a featureless corridor).
+  std::optional<PosePrior> motion_prior;
+  if (!odometry_delta && velocity_hint && params.motion_prior_weight > 0.0) {
+    const double sm = growth * params.motion_prior_sigma_m, sr = growth * params.motion_prior_sigma_rad;
+    motion_prior = PosePrior{*velocity_hint, Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal()};
+  }
   const auto accept = [&](const Pose2& T) {
     return prior ? WithinPrior(T, *prior, params.max_prior_mahalanobis)
                  : WithinMotionBound(T, growth, params);
@@ -197,7 +204,8 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
       }
     }
     const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
-      RefinementResult refined = RefineAlignment(samples, all, c.T_model_scan, prior, params.refinement);
+      RefinementResult refined =
+          RefineAlignment(samples, all, c.T_model_scan, prior ? prior : motion_prior, params.refinement);
       if (!refined.converged || !accept(refined.T_map_scan)) return std::nullopt;
       return refined;
     };

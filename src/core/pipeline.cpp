@@ -101,6 +101,7 @@ void ShapeSlamParams::Validate() const {
   Positive(max_motion_per_scan_m, "ShapeSlamParams::max_motion_per_scan_m");
   Positive(max_turn_per_scan_rad, "ShapeSlamParams::max_turn_per_scan_rad");
   NonNegative(motion_prior_weight, "ShapeSlamParams::motion_prior_weight");
+  if (velocity_window < 1) throw std::invalid_argument("ShapeSlamParams::velocity_window must be >= 1");
   Positive(motion_prior_sigma_m, "ShapeSlamParams::motion_prior_sigma_m");
   Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
   if (!(max_lost_growth >= 1.0) || !std::isfinite(max_lost_growth)) {
@@ -186,9 +187,13 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
     const Pose2 delta = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
     prediction.odometry_delta = delta;
     prediction.T_map_robot = *last_T_map_robot_ * delta;
-  } else if (previous_T_map_robot_) {
-    const Pose2 velocity = previous_T_map_robot_->Inverse() * *last_T_map_robot_;
-    prediction.T_pred_robot_velocity = velocity;
+  } else if (!recent_motions_.empty()) {
+    // Constant velocity: the mean of the last few motions, so that one wrong step (a corridor
+    // matched short) does not stop the prediction.
+    Pose2 mean(0.0, 0.0, 0.0);
+    for (const Pose2& m : recent_motions_) mean.x += m.x, mean.y += m.y, mean.theta += m.theta;
+    const double n = static_cast<double>(recent_motions_.size());
+    prediction.T_pred_robot_velocity = Pose2(mean.x / n, mean.y / n, mean.theta / n);
   }
   return prediction;
 }
@@ -418,6 +423,12 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
   lost_scans_ = loc.trusted || map_.Empty() ? 0 : lost_scans_ + 1;
+  if (last_T_map_robot_) {
+    recent_motions_.push_back(last_T_map_robot_->Inverse() * report.T_map_robot);
+    if (static_cast<int>(recent_motions_.size()) > params_.velocity_window) {
+      recent_motions_.erase(recent_motions_.begin());
+    }
+  }
   report.covariance = loc.covariance;
   report.matched_pairs = loc.matched_pairs;
   report.inlier_ratio = loc.inlier_ratio;
@@ -444,14 +455,12 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     if (SearchLoop()) {
       OptimizeAndRebuild();
       report.T_map_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
-      last_T_map_robot_ = report.T_map_robot;  // the velocity estimate restarts from rest
     }
   }
   if (!keyframes_.empty()) {
     const int k = static_cast<int>(keyframes_.size()) - 1;
     anchors_.push_back({scan.timestamp_s, k, KeyframePose(k).Inverse() * report.T_map_robot});
   }
-  previous_T_map_robot_ = last_T_map_robot_;
   last_T_map_robot_ = report.T_map_robot;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;

@@ -41,6 +41,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "max_prior_mahalanobis", "with odometry, estimates beyond this many standard deviations of it are rejected", &p.max_prior_mahalanobis},
       {"pipeline", "max_motion_per_scan_m", "without odometry, estimates implying a larger motion since the last scan are rejected (m) ...", &p.max_motion_per_scan_m},
       {"pipeline", "max_turn_per_scan_rad", "... or a larger turn (rad)", &p.max_turn_per_scan_rad},
+      {"pipeline", "velocity_window", "without odometry, the constant-velocity prediction is the mean motion of this many last scans", &p.velocity_window},
       {"pipeline", "motion_prior_weight", "without odometry, candidates are ranked by fit less this * squared normalised motion from constant velocity", &p.motion_prior_weight},
       {"pipeline", "motion_prior_sigma_m", "... translation scale (m)", &p.motion_prior_sigma_m},
       {"pipeline", "motion_prior_sigma_rad", "... rotation scale (rad)", &p.motion_prior_sigma_rad},
