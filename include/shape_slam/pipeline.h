@@ -190,6 +190,15 @@ class ShapeSlam {
   /// Loop-closure edges accepted so far.
   int NumLoopClosures() const { return num_loop_closures_; }
 
+  /// A keyframe: the scan that updated the map (beams counter-clockwise) and the robot pose,
+  /// corrected by the latest pose-graph optimisation.
+  struct KeyframeView {
+    LaserScan scan;
+    Pose2 T_map_robot;
+  };
+  /// Every keyframe in order, at its corrected pose (e.g. to build an occupancy grid).
+  std::vector<KeyframeView> Keyframes() const;
+
  private:
   struct Prediction {
     Pose2 T_map_robot;

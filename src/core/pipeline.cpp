@@ -416,4 +416,11 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   return report;
 }
 
+std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {
+  std::vector<KeyframeView> views;
+  views.reserve(keyframes_.size());
+  for (const Keyframe& kf : keyframes_) views.push_back({kf.scan, graph_.Node(kf.node)});
+  return views;
+}
+
 }  // namespace shape_slam
