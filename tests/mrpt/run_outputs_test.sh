@@ -1,0 +1,44 @@
+#!/usr/bin/env bash
+# The MRPT files of `shape-slam run` used by MRPT: map.gridmap loaded as MRPT's apps load a
+# .gridmap (and compared cell by cell with map.pgm/map.yaml), map.simplemap loaded by CSimpleMap
+# and turned into a map by the stock observations2map.
+#   run_outputs_test.sh SHAPE_SLAM MAP_OUTPUTS_CHECK WORK_DIR
+set -u -o pipefail
+bin=$1
+check=$2
+work=$3
+sena="/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
+[[ -r $sena ]] || { echo "SKIP: $sena missing (package mrpt-common)"; exit 77; }
+command -v observations2map >/dev/null || { echo "SKIP: observations2map missing (mrpt-apps)"; exit 77; }
+failures=0
+fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
+rm -rf "$work"
+mkdir -p "$work"
+cd "$work" || exit 1
+
+"$bin" run "$sena" --max-scans 80 --out run --quiet || { echo "FAIL: shape-slam run"; exit 1; }
+keyframes=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["keyframes"])' run/stats.json)
+echo "shape-slam run: $keyframes keyframes"
+"$check" run/map.gridmap run/map.yaml run/map.simplemap "$keyframes" ||
+  fail "map.gridmap / map.simplemap as loaded by MRPT"
+
+# observations2map needs an existing output folder.
+cat >o2m.ini <<'INI'
+[MappingApplication]
+occupancyGrid_count=1
+[MappingApplication_occupancyGrid_00_creationOpts]
+resolution=0.05
+INI
+mkdir -p o2m
+observations2map o2m.ini run/map.simplemap o2m/map </dev/null >o2m.log 2>&1 ||
+  fail "observations2map on map.simplemap exited $? (see $work/o2m.log)"
+png=o2m/map_mrpt__maps__COccupancyGridMap2D_00.png
+grep -q "done: $keyframes observations" o2m.log && echo "ok: observations2map read $keyframes scans" ||
+  fail "observations2map did not read $keyframes scans (see $work/o2m.log)"
+[[ -s $png ]] && echo "ok: observations2map wrote $png" || fail "observations2map wrote no $png"
+
+if ((failures > 0)); then
+  echo "$failures check(s) failed; outputs in $work"
+  exit 1
+fi
+echo "all checks passed"
