@@ -34,6 +34,11 @@ done
 expect 2 "unknown command" -- "$BIN" frobnicate
 expect 0 "--grid-resolution M" -- "$BIN" run --help
 expect 0 "map.simplemap" -- "$BIN" run --help
+# The version is CMake's project(VERSION).
+version=$(sed -n 's/^project(shape_slam VERSION \([0-9.]*\).*/\1/p' "$DATA/../../CMakeLists.txt")
+[ -n "$version" ] || fail "no project(VERSION) in CMakeLists.txt"
+expect 0 "^shape-slam ${version//./\\.}\$" -- "$BIN" --version
+expect 0 "^shape-slam ${version//./\\.}\$" -- "$BIN" version
 expect 2 "Usage" -- "$BIN"
 
 # extract and match on a small CARMEN log.
