@@ -16,8 +16,9 @@
 
 namespace shape_slam::io {
 
-/// The gridmap file content: the same cells, size, resolution and origin as `grid`, with
-/// occupancy probability 1 (occupied), 0 (free) and 0.5 (unknown). Throws OutputError.
+/// The gridmap file content: the same cells, size, resolution and origin as `grid`. MRPT's cell
+/// value is the probability of being free: 0 (occupied), 1 (free), 0.5 (unknown). Throws
+/// OutputError.
 std::string FormatMrptGridmap(const OccupancyGrid& grid);
 
 /// The simplemap file content of the keyframes (ShapeSlam::Keyframes()). Throws LogError for a

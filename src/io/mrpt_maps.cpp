@@ -30,10 +30,12 @@ std::string GzipSerialized(const mrpt::serialization::CSerializable& object, con
   return std::string(gz.begin(), gz.end());
 }
 
-float Probability(CellState state) {
+/// MRPT's cell value is the probability of the cell being FREE: 1 free, 0 occupied (see
+/// COccupancyGridMap2D::isStaticCell, which calls a cell occupied at or below a threshold).
+float FreeProbability(CellState state) {
   switch (state) {
-    case CellState::kOccupied: return 1.0f;
-    case CellState::kFree: return 0.0f;
+    case CellState::kOccupied: return 0.0f;
+    case CellState::kFree: return 1.0f;
     case CellState::kUnknown: break;
   }
   return 0.5f;
@@ -55,7 +57,7 @@ std::string FormatMrptGridmap(const OccupancyGrid& grid) {
                       std::to_string(grid.width) + " x " + std::to_string(grid.height));
   }
   for (int iy = 0; iy < grid.height; ++iy) {
-    for (int ix = 0; ix < grid.width; ++ix) map.setCell(ix, iy, Probability(grid.At(ix, iy)));
+    for (int ix = 0; ix < grid.width; ++ix) map.setCell(ix, iy, FreeProbability(grid.At(ix, iy)));
   }
   return GzipSerialized(map, "grid map");
 }

@@ -4,8 +4,8 @@
 //   map_outputs_check GRIDMAP YAML SIMPLEMAP KEYFRAMES
 //
 // map.gridmap: a COccupancyGridMap2D read as MRPT's apps read .gridmap files, with the size,
-// resolution and origin of map.yaml and every cell in the same class (occupied above
-// occupied_thresh 0.65, free below free_thresh 0.196). map.simplemap: KEYFRAMES entries, each
+// resolution and origin of map.yaml and every cell in the same class (map_server's thresholds:
+// occupied above 0.65, free below 0.196 occupancy). map.simplemap: KEYFRAMES entries, each
 // a sensory frame with one 2D range scan and a pose.
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
@@ -26,9 +26,11 @@ namespace {
 
 using shape_slam::io::CellState;
 
-CellState ClassOf(float p) {
-  if (p > 0.65f) return CellState::kOccupied;
-  if (p < 0.196f) return CellState::kFree;
+// MRPT's cell value is the probability of being free. Occupied as MRPT's own isStaticCell
+// decides it, with map_server's thresholds turned into free probabilities.
+CellState ClassOf(const mrpt::maps::COccupancyGridMap2D& grid, int ix, int iy) {
+  if (grid.isStaticCell(ix, iy, 1.0f - 0.65f)) return CellState::kOccupied;
+  if (grid.getCell(ix, iy) > 1.0f - 0.196f) return CellState::kFree;
   return CellState::kUnknown;
 }
 
@@ -52,7 +54,7 @@ int CheckGridmap(const std::string& gridmap_path, const std::string& yaml_path) 
   std::size_t occupied = 0, free = 0, differ = 0;
   for (int iy = 0; iy < ros.height; ++iy) {
     for (int ix = 0; ix < ros.width; ++ix) {
-      const CellState state = ClassOf(grid.getCell(ix, iy));
+      const CellState state = ClassOf(grid, ix, iy);
       occupied += state == CellState::kOccupied;
       free += state == CellState::kFree;
       differ += state != ros.At(ix, iy);
