@@ -45,8 +45,9 @@ struct OccupancyGrid {
 };
 
 /// The grid of `walls` (map-frame polylines) and the free space seen by `keyframes` (scans at
-/// their map-frame poses, ShapeSlam::Keyframes()), covering both with a margin. Throws std::invalid_argument for invalid params or when the grid would exceed
-/// params.max_cells (the message gives its size).
+/// their map-frame poses, ShapeSlam::Keyframes()), covering both with a margin. Throws
+/// std::invalid_argument for invalid params or when the grid would exceed params.max_cells (the
+/// message gives its size).
 OccupancyGrid BuildOccupancyGrid(const std::vector<Polyline>& walls,
                                  const std::vector<ShapeSlam::KeyframeView>& keyframes,
                                  const OccupancyGridParams& params);

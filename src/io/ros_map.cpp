@@ -105,7 +105,9 @@ std::string FormatPgm(const OccupancyGrid& grid) {
   pgm.reserve(pgm.size() + grid.cells.size());
   for (int row = 0; row < grid.height; ++row) {
     const int iy = grid.height - 1 - row;  // the first row is the top (highest y)
-    for (int ix = 0; ix < grid.width; ++ix) pgm.push_back(static_cast<char>(PixelOf(grid.At(ix, iy))));
+    for (int ix = 0; ix < grid.width; ++ix) {
+      pgm.push_back(static_cast<char>(PixelOf(grid.At(ix, iy))));
+    }
   }
   return pgm;
 }
@@ -122,7 +124,9 @@ OccupancyGrid LoadRosMap(const std::string& yaml_path) {
   const auto image_it = yaml.find("image");
   if (image_it == yaml.end()) throw MapFileError(yaml_path + ": no 'image'");
   std::filesystem::path image_path(image_it->second);
-  if (image_path.is_relative()) image_path = std::filesystem::path(yaml_path).parent_path() / image_path;
+  if (image_path.is_relative()) {
+    image_path = std::filesystem::path(yaml_path).parent_path() / image_path;
+  }
   OccupancyGrid grid;
   grid.resolution_m = Number(yaml, "resolution", yaml_path);
   const auto origin_it = yaml.find("origin");

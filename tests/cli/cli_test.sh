@@ -72,11 +72,13 @@ for f in map.pgm map.yaml map.gridmap map.simplemap; do
   [ ! -e "$WORK/nogrid/$f" ] || fail "--no-grid/--no-gridmap/--no-simplemap still wrote $f"
 done
 [ -s "$WORK/nogrid/map.polylines" ] || fail "--no-grid dropped map.polylines"
-expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/onlyros" --quiet --no-gridmap --no-simplemap
+expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/onlyros" --quiet --no-gridmap \
+  --no-simplemap
 [ -s "$WORK/onlyros/map.pgm" ] && [ ! -e "$WORK/onlyros/map.gridmap" ] &&
   [ ! -e "$WORK/onlyros/map.simplemap" ] || fail "--no-gridmap --no-simplemap"
 for bad in -1 0 abc nan; do
-  expect 2 "grid-resolution.*'$bad'" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/o" --grid-resolution "$bad"
+  expect 2 "grid-resolution.*'$bad'" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/o" \
+    --grid-resolution "$bad"
 done
 expect 0 "ATE \(RMSE\) +0\.0+ m" -- "$BIN" eval "$WORK/head/trajectory.tum" "$WORK/head/trajectory.tum"
 

@@ -64,7 +64,8 @@ TEST(CellsOnSegmentTest, MatchesDenseSamplingOnRandomSegments) {
 TEST(OccupancyGridTest, WallsOccupiedBeamsFreeOutsideUnknown) {
   OccupancyGridParams params;
   params.resolution_m = 0.05;
-  const OccupancyGrid grid = BuildOccupancyGrid(RoomWalls(), {RoomKeyframe(Pose2(0.3, -0.2, 0.4))}, params);
+  const OccupancyGrid grid =
+      BuildOccupancyGrid(RoomWalls(), {RoomKeyframe(Pose2(0.3, -0.2, 0.4))}, params);
   // Origin on a multiple of the resolution; the room plus the margin covered.
   EXPECT_NEAR(std::remainder(grid.origin_m.x(), 0.05), 0.0, 1e-9);
   EXPECT_LE(grid.origin_m.x(), -2.0 - params.margin_m + 1e-9);

@@ -71,7 +71,8 @@ TEST(RosMapTest, RoundTripKeepsEveryCellAndTheGeometry) {
   for (std::size_t i = 0; i < keyframe.scan.ranges_m.size(); i += 7) {
     const double angle = keyframe.T_map_robot.theta + keyframe.scan.angles_rad[i];
     for (double r = 0.0; r < keyframe.scan.ranges_m[i] - 0.1; r += 0.02) {
-      const Point2 p = keyframe.T_map_robot.Translation() + r * Point2(std::cos(angle), std::sin(angle));
+      const Point2 p =
+          keyframe.T_map_robot.Translation() + r * Point2(std::cos(angle), std::sin(angle));
       const Eigen::Vector2i c = *loaded.CellOf(p);
       EXPECT_EQ(loaded.At(c.x(), c.y()), CellState::kFree) << "beam " << i << " at " << r;
     }
