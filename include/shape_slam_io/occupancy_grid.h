@@ -2,7 +2,8 @@
 // map_server, MRPT's planners and localisers). Plain geometry, no I/O:
 //  - free: every cell a keyframe beam crosses from the sensor to its endpoint (the endpoint's
 //    own cell excluded); a beam without return (range >= the scan's max range) clears up to
-//    max_free_range_m; a beam with no reading (NaN, <= 0) clears nothing;
+//    max_free_range_m or the first wall, whichever comes first; a beam with no reading (NaN,
+//    <= 0) clears nothing;
 //  - occupied: every cell a segment of the map's polylines crosses (this wins over free);
 //  - unknown: the rest.
 // Cells are squares of resolution_m; cell (ix, iy) covers [origin + ix * res, origin + (ix + 1)

@@ -76,6 +76,21 @@ void Set(OccupancyGrid& grid, const Eigen::Vector2i& cell, CellState state) {
   grid.cells[static_cast<std::size_t>(cell.y()) * grid.width + cell.x()] = state;
 }
 
+/// The cells a ray clears: up to its return, the return's own cell excluded; a ray without
+/// return stops at the first wall it meets (the laser saw through it: glass, or a grazing beam).
+std::vector<Eigen::Vector2i> FreeCells(const OccupancyGrid& walls, const Ray& ray) {
+  std::vector<Eigen::Vector2i> cells = CellsOnSegment(walls, ray.from, ray.to);
+  if (ray.hit) {
+    if (!cells.empty()) cells.pop_back();
+    return cells;
+  }
+  const auto wall = std::find_if(cells.begin(), cells.end(), [&](const Eigen::Vector2i& c) {
+    return walls.At(c.x(), c.y()) == CellState::kOccupied;
+  });
+  cells.erase(wall, cells.end());
+  return cells;
+}
+
 }  // namespace
 
 void OccupancyGridParams::Validate() const {
@@ -144,19 +159,23 @@ OccupancyGrid BuildOccupancyGrid(const std::vector<Polyline>& walls,
     rays.insert(rays.end(), more.begin(), more.end());
   }
   const auto [min, max] = BoundingBox(walls, rays);
-  OccupancyGrid grid = EmptyGrid(min, max, params);
-  for (const Ray& ray : rays) {
-    std::vector<Eigen::Vector2i> cells = CellsOnSegment(grid, ray.from, ray.to);
-    if (ray.hit && !cells.empty()) cells.pop_back();  // the return's own cell is not free
-    for (const Eigen::Vector2i& cell : cells) Set(grid, cell, CellState::kFree);
-  }
+  OccupancyGrid walls_only = EmptyGrid(min, max, params);
   for (const Polyline& wall : walls) {
     for (std::size_t i = 0; i < wall.size(); ++i) {
       const Point2& next = wall[std::min(i + 1, wall.size() - 1)];
-      for (const Eigen::Vector2i& cell : CellsOnSegment(grid, wall[i], next)) {
-        Set(grid, cell, CellState::kOccupied);
+      for (const Eigen::Vector2i& cell : CellsOnSegment(walls_only, wall[i], next)) {
+        Set(walls_only, cell, CellState::kOccupied);
       }
     }
+  }
+  OccupancyGrid grid = walls_only;
+  for (const Ray& ray : rays) {
+    for (const Eigen::Vector2i& cell : FreeCells(walls_only, ray)) {
+      Set(grid, cell, CellState::kFree);
+    }
+  }
+  for (std::size_t i = 0; i < grid.cells.size(); ++i) {
+    if (walls_only.cells[i] == CellState::kOccupied) grid.cells[i] = CellState::kOccupied;
   }
   return grid;
 }

@@ -108,6 +108,16 @@ TEST(OccupancyGridTest, BeamsWithoutReturnClearUpToTheCapAndNoReadingClearsNothi
   EXPECT_EQ(state({1.45, 0.05}), CellState::kFree);
   EXPECT_EQ(state({2.0, 0.05}), CellState::kUnknown);
   EXPECT_EQ(state({0.05, 0.5}), CellState::kUnknown);
+  // A wall across the beam without return: it clears up to the wall, not beyond.
+  const OccupancyGrid walled =
+      BuildOccupancyGrid({{{0.75, -1.0}, {0.75, 1.0}}}, {keyframe}, params);
+  auto walled_state = [&](const Point2& p) {
+    const Eigen::Vector2i c = *walled.CellOf(p);
+    return walled.At(c.x(), c.y());
+  };
+  EXPECT_EQ(walled_state({0.5, 0.05}), CellState::kFree);
+  EXPECT_EQ(walled_state({0.75, 0.05}), CellState::kOccupied);
+  EXPECT_EQ(walled_state({1.0, 0.05}), CellState::kUnknown);
 }
 
 TEST(OccupancyGridTest, InvalidParamsAndHugeGridsAreRefused) {
