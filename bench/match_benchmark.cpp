@@ -149,7 +149,7 @@ int main(int argc, char** argv) {
   }
   try {
     std::vector<Row> rows;
-    const shape_slam::ShapeSlamParams params;
+    const shape_slam::ScanMatchParams params;
     for (std::size_t f = 0; f < inputs.size(); f += 2) {
       const std::vector<LaserScan> scans = shape_slam::io::ReadAllScans(inputs[f]);
       std::vector<shape_slam::StampedPose> gt = shape_slam::io::ReadTrajectory(inputs[f + 1]);

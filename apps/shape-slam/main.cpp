@@ -36,6 +36,7 @@ void PrintHelp(std::ostream& out) {
     out << "  " << command.name << std::string(10 - std::string(command.name).size(), ' ')
         << command.summary << "\n";
   }
+  out << "  version   print the version (also --version)\n";
   out << "\nLogs: CARMEN (.log, .clf, optionally .gz) and MRPT rawlogs (.rawlog, gzip or plain).\n"
          "Run 'shape-slam <command> --help' for the options of a command.\n";
 }
@@ -51,6 +52,10 @@ int main(int argc, char** argv) {
   const std::string name = argv[1];
   if (name == "-h" || name == "--help" || name == "help") {
     PrintHelp(std::cout);
+    return 0;
+  }
+  if (name == "--version" || name == "version") {
+    std::cout << "shape-slam " << SHAPE_SLAM_VERSION << "\n";
     return 0;
   }
   const Args args(argv + 2, argv + argc);

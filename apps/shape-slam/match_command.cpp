@@ -70,17 +70,17 @@ int RunMatch(const Args& args) {
   const std::vector<LaserScan> scans = ReadScansAt(parser.Get("LOG"), {i, j}, parser.Has("--strict"));
   const LaserScan& scan_i = scans[0];
   const LaserScan& scan_j = scans[1];
-  const ScanMatchResult m = MatchScans(scan_i, scan_j, guess, params);
+  const ScanMatchResult m = MatchScans(scan_i, scan_j, guess, ToScanMatchParams(params));
 
   if (const auto svg = parser.GetOptional("--svg")) {
     io::Drawing drawing;
     drawing.title = "scan " + std::to_string(j) + " on scan " + std::to_string(i);
     drawing.pixels_per_m = 60.0;
     drawing.layers.push_back({"scan " + std::to_string(i),
-                              RobotFramePolylines(scan_i, Pose2(), params.extraction),
+                              RobotFramePolylines(scan_i, Pose2(), params.shapes.extraction),
                               {}, {40, 90, 200}, 2.0, 1.0, false});
     drawing.layers.push_back({"scan " + std::to_string(j) + " at the estimate",
-                              RobotFramePolylines(scan_j, m.T_i_j, params.extraction),
+                              RobotFramePolylines(scan_j, m.T_i_j, params.shapes.extraction),
                               {}, {210, 40, 40}, 1.2, 1.0, false});
     io::WriteFileAtomically(*svg, io::RenderSvg(drawing));
   }

@@ -6,6 +6,9 @@
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 #include "cli.h"
 #include "commands.h"
@@ -16,8 +19,13 @@
 #include "shape_slam_io/drawing.h"
 #include "shape_slam_io/json_writer.h"
 #include "shape_slam_io/map_file.h"
+#include "shape_slam_io/occupancy_grid.h"
+#include "shape_slam_io/ros_map.h"
 #include "shape_slam_io/params_ini.h"
 #include "shape_slam_io/trajectory_io.h"
+#if SHAPE_SLAM_HAVE_MRPT
+#include "shape_slam_io/mrpt_maps.h"
+#endif
 
 namespace shape_slam::app {
 namespace {
@@ -38,11 +46,22 @@ ArgParser MakeParser() {
       .Flag("--quiet", "no progress bar and no summary")
       .Flag("--print-config", "print the parameters in ini form (defaults, or --config's) and exit")
       .Flag("--strict", "fail on the first malformed log record instead of skipping it")
+      .Option("--grid-resolution", {"M"}, "cell size of the occupancy grids, metres", "0.05")
+      .Flag("--no-grid", "do not write map.pgm and map.yaml")
+      .Flag("--no-gridmap", "do not write map.gridmap")
+      .Flag("--no-simplemap", "do not write map.simplemap")
       .Epilog(
           "Outputs (written atomically into DIR, only after a successful run):\n"
           "  trajectory.tum   one line per laser scan: timestamp x y z qx qy qz qw (log time)\n"
           "  map.polylines    the map (format in include/shape_slam_io/map_file.h)\n"
           "  map.svg, map.png pictures of the map and the trajectory, 1 m grid\n"
+          "  map.pgm, map.yaml  occupancy grid for ROS map_server (occupied 0, free 254,\n"
+          "                   unknown 205): walls from the polylines, free space by ray casting\n"
+          "                   the keyframe scans at their corrected poses\n"
+          "  map.gridmap      the same grid as a gzip-compressed serialized MRPT\n"
+          "                   COccupancyGridMap2D (MRPT builds only)\n"
+          "  map.simplemap    the keyframe scans at their corrected poses, an MRPT CSimpleMap\n"
+          "                   (observations2map, RawLogViewer; MRPT builds only)\n"
           "  stats.json       scans, wall time, per-scan times, map size, log issues\n\n"
           "Example:\n  shape-slam run datasets/radish/intel.log.gz --out intel-out");
   return parser;
@@ -169,23 +188,62 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   return json.str() + "\n";
 }
 
-void WriteOutputs(const std::string& dir, const RunOutput& out, const PolylineMap& map,
-                  const std::string& stats_json_without_size, const std::string& map_text,
-                  const std::string& title) {
+/// Which grid outputs to write, and their cell size.
+struct GridOutputs {
+  bool ros = true;        // map.pgm + map.yaml
+  bool gridmap = true;    // map.gridmap (MRPT)
+  bool simplemap = true;  // map.simplemap (MRPT)
+  double resolution_m = 0.05;
+};
+
+using OutputFiles = std::vector<std::pair<std::string, std::string>>;  // name, content
+
+// The occupancy grids and the simple map, from the keyframes at their final corrected poses
+// (after the last pose-graph optimisation) and the map's polylines.
+OutputFiles RenderGridOutputs(const ShapeSlam& slam, const GridOutputs& what) {
+  OutputFiles files;
+  const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
+  if (what.ros || what.gridmap) {
+    std::vector<Polyline> walls;
+    for (const PolylineId id : slam.Map().Ids()) walls.push_back(slam.Map().Get(id).points);
+    io::OccupancyGridParams params;
+    params.resolution_m = what.resolution_m;
+    const io::OccupancyGrid grid = io::BuildOccupancyGrid(walls, keyframes, params);
+    if (what.ros) {
+      files.emplace_back("map.pgm", io::FormatPgm(grid));
+      files.emplace_back("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
+    }
+#if SHAPE_SLAM_HAVE_MRPT
+    if (what.gridmap) files.emplace_back("map.gridmap", io::FormatMrptGridmap(grid));
+#endif
+  }
+#if SHAPE_SLAM_HAVE_MRPT
+  if (what.simplemap) files.emplace_back("map.simplemap", io::FormatMrptSimplemap(keyframes));
+#endif
+  return files;
+}
+
+// Everything is rendered before the first file is replaced, so a failure leaves the directory
+// as it was. Returns the names written, in order.
+std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& out,
+                                      const ShapeSlam& slam, const GridOutputs& grids,
+                                      const std::string& stats_json, const std::string& map_text,
+                                      const std::string& title) {
   std::vector<Point2> path;
   for (const StampedPose& p : out.trajectory) path.push_back(p.pose.Translation());
-  const io::Drawing drawing = io::MakeMapDrawing(map, path, title);
-  const std::filesystem::path d(dir);
-  // Everything is rendered before the first file is replaced, so a failure leaves the
-  // directory as it was.
-  const std::string tum = io::FormatTum(out.trajectory);
-  const std::string svg = io::RenderSvg(drawing);
-  const std::string png = io::RenderPng(drawing);
-  io::WriteFileAtomically((d / "trajectory.tum").string(), tum);
-  io::WriteFileAtomically((d / "map.polylines").string(), map_text);
-  io::WriteFileAtomically((d / "map.svg").string(), svg);
-  io::WriteFileAtomically((d / "map.png").string(), png);
-  io::WriteFileAtomically((d / "stats.json").string(), stats_json_without_size);
+  const io::Drawing drawing = io::MakeMapDrawing(slam.Map(), path, title);
+  OutputFiles files = {{"trajectory.tum", io::FormatTum(out.trajectory)},
+                       {"map.polylines", map_text},
+                       {"map.svg", io::RenderSvg(drawing)},
+                       {"map.png", io::RenderPng(drawing)}};
+  for (auto& file : RenderGridOutputs(slam, grids)) files.push_back(std::move(file));
+  files.emplace_back("stats.json", stats_json);
+  std::vector<std::string> names;
+  for (const auto& [name, content] : files) {
+    io::WriteFileAtomically((std::filesystem::path(dir) / name).string(), content);
+    names.push_back(name);
+  }
+  return names;
 }
 
 }  // namespace
@@ -207,6 +265,15 @@ int RunRun(const Args& args) {
   const std::string out_dir = parser.GetOptional("--out").value_or("shape-slam-out");
   const bool quiet = parser.Has("--quiet");
   const long long max_scans = parser.Has("--max-scans") ? parser.GetIndex("--max-scans") : -1;
+  GridOutputs grids;
+  grids.ros = !parser.Has("--no-grid");
+  grids.gridmap = !parser.Has("--no-gridmap");
+  grids.simplemap = !parser.Has("--no-simplemap");
+  grids.resolution_m = parser.GetDouble("--grid-resolution", grids.resolution_m);
+  if (grids.resolution_m <= 0.0) {
+    throw UsageError("--grid-resolution: '" + parser.Get("--grid-resolution") +
+                     "' is not a cell size > 0 (metres)");
+  }
   io::EnsureDirectory(out_dir);  // fail early on an unusable output path
 
   const std::unique_ptr<io::LogReader> reader = OpenLogForApp(log, parser.Has("--strict"));
@@ -226,8 +293,8 @@ int RunRun(const Args& args) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const std::string stats =
       StatsJson(out, slam.Map(), map_text.size(), wall_s, *reader, params, slam.Odometry());
-  WriteOutputs(out_dir, out, slam.Map(), stats, map_text,
-               std::filesystem::path(log).filename().string());
+  const std::vector<std::string> written = WriteOutputs(
+      out_dir, out, slam, grids, stats, map_text, std::filesystem::path(log).filename().string());
   ReportRunIssues(out, slam.Odometry(), params.use_odometry);
   if (!quiet) {
     std::cout << std::fixed << std::setprecision(2) << "mapped " << out.trajectory.size()
@@ -235,8 +302,9 @@ int RunRun(const Args& args) {
               << Percentile(out.scan_ms, 0.5) << " ms/scan), " << out.matched
               << " matched, map: " << slam.Map().NumPolylines() << " polylines, "
               << slam.Map().NumVertices() << " vertices\n"
-              << "outputs in " << out_dir << "/ (trajectory.tum, map.polylines, map.svg, map.png, "
-              << "stats.json)\n";
+              << "outputs in " << out_dir << "/ (";
+    for (std::size_t i = 0; i < written.size(); ++i) std::cout << (i ? ", " : "") << written[i];
+    std::cout << ")\n";
   }
   return 0;
 }

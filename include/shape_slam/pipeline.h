@@ -22,10 +22,11 @@
 #include "shape_slam/candidate_selection.h"
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
-#include "shape_slam/polyline_extraction.h"
 #include "shape_slam/evaluation.h"
 #include "shape_slam/polyline_map.h"
 #include "shape_slam/pose_graph.h"
+#include "shape_slam/scan_matcher.h"
+#include "shape_slam/scan_shapes.h"
 #include "shape_slam/shape_matcher.h"
 #include "shape_slam/visibility.h"
 #include "shape_slam/window_search.h"
@@ -102,15 +103,7 @@ struct LoopClosureParams {
 };
 
 struct ShapeSlamParams {
-  ExtractionParams extraction;       ///< §3.1 grouping
-  DceParams dce;                     ///< §3.1 simplification before shape matching
-  /// Shape matching compares polylines with at most this many vertices (DCE continued): bounds
-  /// the cost of S on cluttered scans; S* evolves further where that helps (§4.1).
-  int max_shape_vertices = 16;
-  /// Lighter DCE of the same polylines whose samples drive the alignment (§5.1), metres ...
-  double alignment_dce_threshold_m = 0.005;
-  /// ... never moving them farther than this from the scan points (metres).
-  double alignment_max_deviation_m = 0.02;
+  ScanShapesParams shapes;           ///< §3.1 grouping and simplification of each scan
   VisibilityParams visibility;       ///< visible map shape; its fov_rad is set per scan
   /// The visible map shape covers the scan's field of view widened by this on each side, rad.
   double visibility_fov_margin_rad = 0.35;
@@ -181,6 +174,10 @@ struct ShapeSlamParams {
   void Validate() const;
 };
 
+/// The scan-to-scan registration settings that agree with the mapper's (shapes, matcher,
+/// refinement, selection and window search; the seed counts of scan_match_*).
+ScanMatchParams ToScanMatchParams(const ShapeSlamParams& params);
+
 /// What the mapper made of the log's odometry so far. Real logs come without odometry (no
 /// odometry at all, or every pose zero): odometry that has never moved since the first scan is
 /// treated as absent, and such scans are matched by shape alone (§4.3), as with use_odometry =
@@ -239,6 +236,15 @@ class ShapeSlam {
   int NumLoopClosures() const { return num_loop_closures_; }
   /// Whether the log's odometry was used (see OdometryStatus).
   const OdometryReport& Odometry() const { return odometry_; }
+
+  /// A keyframe: the scan that updated the map (beams counter-clockwise) and the robot pose,
+  /// corrected by the latest pose-graph optimisation.
+  struct KeyframeView {
+    LaserScan scan;
+    Pose2 T_map_robot;
+  };
+  /// Every keyframe in order, at its corrected pose (e.g. to build an occupancy grid).
+  std::vector<KeyframeView> Keyframes() const;
 
  private:
   struct Prediction {

@@ -43,9 +43,9 @@ struct CreationOptions {
 /// visible map shape at the scan's pose (for the contradiction rule) and the map update (§5.2).
 struct InsertionOptions {
   ExtractionParams extraction;
-  /// ShapeSlamParams::alignment_dce_threshold_m, metres.
+  /// ScanShapesParams::alignment_dce_threshold_m, metres.
   double alignment_dce_threshold_m = 0.005;
-  /// ShapeSlamParams::alignment_max_deviation_m, metres.
+  /// ScanShapesParams::alignment_max_deviation_m, metres.
   double alignment_max_deviation_m = 0.02;
   /// The visible map shape; max_range_m is cut to the scan's farthest reading + 1 m, fov_rad is
   /// the scan's field of view widened by visibility_fov_margin_rad on each side.

@@ -16,15 +16,6 @@
 namespace shape_slam::internal {
 namespace {
 
-// DCE continued until at most `max_vertices` remain: bounds the cost of S (O(m n (m + n)) in
-// the arcs) on cluttered scans; S* evolves further where that helps (§4.1).
-Polyline LimitVertices(const Polyline& polyline, int max_vertices) {
-  if (static_cast<int>(polyline.size()) <= max_vertices) return polyline;
-  CurveEvolution evolution(polyline);
-  while (evolution.CanRemove() && evolution.NumVertices() > max_vertices) evolution.RemoveNext();
-  return evolution.Current();
-}
-
 // Whether an estimate lies within max_sigma standard deviations (Mahalanobis) of the prior.
 bool WithinPrior(const Pose2& estimate, const PosePrior& prior, double max_sigma) {
   const Pose2 d = prior.T_map_scan.Inverse() * estimate;
@@ -62,21 +53,6 @@ std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Poly
 
 }  // namespace
 
-// The polyline as shape matching sees it: DCE at the matching threshold, vertex count bounded.
-Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& params) {
-  return LimitVertices(SimplifyDce(polyline, params.dce.threshold_m), params.max_shape_vertices);
-}
-
-Shapes ExtractShapes(const LaserScan& scan, const ShapeSlamParams& params) {
-  Shapes shapes;
-  for (const Polyline& raw : ExtractPolylines(scan, params.extraction)) {
-    shapes.coarse.push_back(ForShapeMatching(raw, params));
-    shapes.fine.push_back(SimplifyDceBounded(raw, params.alignment_dce_threshold_m,
-                                             params.alignment_max_deviation_m));
-  }
-  return shapes;
-}
-
 // Covariance of the odometry increment T_prev_cur, as a prior on the correction.
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {
   const double distance = delta.Translation().norm();
@@ -99,13 +75,13 @@ std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double s
 RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
                                   const std::vector<Polyline>& model, const Pose2& init,
                                   const std::optional<PosePrior>& prior,
-                                  const ShapeSlamParams& params) {
-  RefinementParams coarse = params.refinement;
+                                  const RefinementParams& refinement, double coarse_gate_m) {
+  RefinementParams coarse = refinement;
   coarse.max_correspondence_distance_m =
-      std::max(params.coarse_gate_m, params.refinement.max_correspondence_distance_m);
-  coarse.loss_scale_m = std::max(coarse.loss_scale_m, params.coarse_gate_m / 4.0);
+      std::max(coarse_gate_m, refinement.max_correspondence_distance_m);
+  coarse.loss_scale_m = std::max(coarse.loss_scale_m, coarse_gate_m / 4.0);
   const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
-  return RefineAlignment(samples, model, first.T_map_scan, prior, params.refinement);
+  return RefineAlignment(samples, model, first.T_map_scan, prior, refinement);
 }
 
 // Fraction of the samples within the grid's radius of the model at an estimate.
@@ -267,7 +243,8 @@ std::optional<KeyframeMatch> MatchKeyframe(const Shapes& scan, const Shapes& key
   // Among fits that explain the scan about equally well, the one nearest the estimate wins:
   // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
   const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
-    RefinementResult refined = RefineAgainstMap(samples, keyframe.fine, c.T_model_scan, std::nullopt, params);
+    RefinementResult refined = RefineAgainstMap(samples, keyframe.fine, c.T_model_scan,
+                                                std::nullopt, params.refinement, params.coarse_gate_m);
     if (!refined.converged) return std::nullopt;
     return refined;
   };

@@ -51,7 +51,7 @@ Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosure
 // The visible shape a scan is matched against: around the scan's own field of view, all around
 // when there is no pose estimate (§4.3).
 VisibilityParams VisibilityFor(const LaserScan& scan, bool no_estimate, const ShapeSlamParams& p) {
-  VisibilityParams visibility = VisibilityForScan(scan, p.visibility, p.extraction.min_range_m,
+  VisibilityParams visibility = VisibilityForScan(scan, p.visibility, p.shapes.extraction.min_range_m,
                                                   p.visibility_fov_margin_rad);
   if (no_estimate) visibility.fov_rad = 2.0 * M_PI;
   return visibility;
@@ -73,13 +73,7 @@ void OdometryNoiseParams::Validate() const {
 }
 
 void ShapeSlamParams::Validate() const {
-  extraction.Validate();
-  dce.Validate();
-  Positive(alignment_dce_threshold_m, "ShapeSlamParams::alignment_dce_threshold_m");
-  Positive(alignment_max_deviation_m, "ShapeSlamParams::alignment_max_deviation_m");
-  if (max_shape_vertices < 2) {
-    throw std::invalid_argument("ShapeSlamParams::max_shape_vertices must be >= 2");
-  }
+  shapes.Validate();
   visibility.Validate();
   NonNegative(visibility_fov_margin_rad, "ShapeSlamParams::visibility_fov_margin_rad");
   matcher.Validate();
@@ -145,6 +139,23 @@ void LoopClosureParams::Validate() const {
     throw std::invalid_argument("LoopClosureParams: inlier ratios must be in [0, 1]");
   }
   graph.Validate();
+}
+
+ScanMatchParams ToScanMatchParams(const ShapeSlamParams& params) {
+  ScanMatchParams scan_match;
+  scan_match.shapes = params.shapes;
+  scan_match.matcher = params.matcher;
+  scan_match.refinement = params.refinement;
+  scan_match.selection = params.selection;
+  const double all_turns = scan_match.window_search.half_window_rad;
+  scan_match.window_search = params.window_search;
+  scan_match.window_search.half_window_rad = all_turns;
+  scan_match.window_search_spacing_m = params.window_search_spacing_m;
+  scan_match.coarse_gate_m = params.coarse_gate_m;
+  scan_match.min_inlier_ratio = params.min_inlier_ratio;
+  scan_match.seed_pairs = params.scan_match_seed_pairs;
+  scan_match.seeds = params.scan_match_seeds;
+  return scan_match;
 }
 
 const char* ToString(OdometryStatus status) {
@@ -386,7 +397,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   const LaserScan scan = CounterClockwiseScan(input_scan);
   ScanReport report;
   report.timestamp_s = scan.timestamp_s;
-  internal::Shapes shapes = internal::ExtractShapes(scan, params_);
+  ScanShapes shapes = ExtractScanShapes(scan, params_.shapes);
   report.polylines = static_cast<int>(shapes.coarse.size());
   TrackOdometry(scan);
   const Prediction prediction = Predict(scan);
@@ -401,7 +412,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     visible = map_.Visible(T_map_sensor_pred, visibility);
     internal::LocalModel model;
     for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
-    for (const Polyline& p : model.map) model.map_coarse.push_back(internal::ForShapeMatching(p, params_));
+    for (const Polyline& p : model.map) model.map_coarse.push_back(ForShapeMatching(p, params_.shapes));
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
     if (params_.use_last_keyframe && !keyframes_.empty()) {
       const Keyframe& last = keyframes_.back();
@@ -464,6 +475,13 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   last_T_map_robot_ = report.T_map_robot;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;
+}
+
+std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {
+  std::vector<KeyframeView> views;
+  views.reserve(keyframes_.size());
+  for (const Keyframe& kf : keyframes_) views.push_back({kf.scan, graph_.Node(kf.node)});
+  return views;
 }
 
 }  // namespace shape_slam

@@ -1,6 +1,7 @@
 #include "shape_slam/scan_matcher.h"
 
 #include <algorithm>
+#include <stdexcept>
 #include <utility>
 #include <vector>
 
@@ -11,9 +12,27 @@
 
 namespace shape_slam {
 
+void ScanMatchParams::Validate() const {
+  shapes.Validate();
+  matcher.Validate();
+  refinement.Validate();
+  selection.Validate();
+  window_search.Validate();
+  if (!(window_search_spacing_m > 0.0) || !(coarse_gate_m > 0.0)) {
+    throw std::invalid_argument(
+        "ScanMatchParams::window_search_spacing_m and coarse_gate_m must be > 0");
+  }
+  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
+    throw std::invalid_argument("ScanMatchParams::min_inlier_ratio must be in [0, 1]");
+  }
+  if (seed_pairs < 1 || seeds < 1) {
+    throw std::invalid_argument("ScanMatchParams::seed_pairs and seeds must be >= 1");
+  }
+}
+
 ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
                            const std::optional<Pose2>& guess_T_i_j,
-                           const ShapeSlamParams& params) {
+                           const ScanMatchParams& params) {
   params.Validate();
   // Robot frames (the result) <-> sensor frames (where the shapes live).
   const auto to_sensor = [&](const Pose2& T_i_j) {
@@ -24,8 +43,8 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
   };
   ScanMatchResult result;
   result.T_i_j = guess_T_i_j.value_or(Pose2());
-  const internal::Shapes shapes_i = internal::ExtractShapes(scan_i, params);
-  const internal::Shapes shapes_j = internal::ExtractShapes(scan_j, params);
+  const ScanShapes shapes_i = ExtractScanShapes(scan_i, params.shapes);
+  const ScanShapes shapes_j = ExtractScanShapes(scan_j, params.shapes);
   const std::vector<Point2> samples =
       internal::AlignmentSamples(shapes_j.fine, params.matcher.alignment.sample_spacing_m);
   if (shapes_i.coarse.empty() || samples.empty()) return result;
@@ -46,8 +65,8 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
     if (!use_guess) input.hint_estimates.push_back(guess ? *guess : to_sensor(Pose2()));
     ShapeMatcherParams matcher = params.matcher;
     if (!use_guess) {
-      matcher.max_seed_pairs = params.scan_match_seed_pairs;
-      matcher.num_seeds = params.scan_match_seeds;
+      matcher.max_seed_pairs = params.seed_pairs;
+      matcher.num_seeds = params.seeds;
     }
     const ShapeMatchResult match =
         MatchShapes(input, use_guess ? guess : std::nullopt, matcher);
@@ -64,9 +83,7 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
   const Pose2 reference = guess.value_or(to_sensor(Pose2()));
   candidates.push_back(reference);
   // The window around the reference, all turns included: where scan J fits scan I at all.
-  WindowSearchParams window = params.window_search;
-  window.half_window_rad = M_PI;
-  const WindowSearch search(shapes_i.fine, window);
+  const WindowSearch search(shapes_i.fine, params.window_search);
   const std::vector<Point2> coarse = internal::Thinned(
       samples, params.matcher.alignment.sample_spacing_m, params.window_search_spacing_m);
   for (const WindowHypothesis& h : search.Search(coarse, reference)) candidates.push_back(h.T_model_scan);
@@ -79,7 +96,8 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
   const CandidateSelector selector(shapes_i.fine, selection);
   const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
     RefinementResult refined =
-        internal::RefineAgainstMap(samples, shapes_i.fine, c.T_model_scan, std::nullopt, params);
+        internal::RefineAgainstMap(samples, shapes_i.fine, c.T_model_scan, std::nullopt,
+                                   params.refinement, params.coarse_gate_m);
     if (!refined.converged) return std::nullopt;
     return refined;
   };

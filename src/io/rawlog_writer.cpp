@@ -10,14 +10,15 @@
 #include <cmath>
 #include <string>
 
+#include "mrpt_scan_internal.h"
 #include "shape_slam_io/atomic_file.h"
 
 namespace shape_slam::io {
-namespace {
+namespace internal {
 
 constexpr double kEvenSpacingTolerance = 1e-6;  // rad
 
-mrpt::obs::CObservation2DRangeScan ToObservation(const LaserScan& scan, std::size_t index) {
+mrpt::obs::CObservation2DRangeScan ToMrptScan(const LaserScan& scan, std::size_t index) {
   const std::size_t n = scan.ranges_m.size();
   if (n == 0 || scan.angles_rad.size() != n) {
     throw LogError("scan " + std::to_string(index) + ": no beams or angles/ranges mismatch");
@@ -50,7 +51,7 @@ mrpt::obs::CObservation2DRangeScan ToObservation(const LaserScan& scan, std::siz
   return obs;
 }
 
-}  // namespace
+}  // namespace internal
 
 RawlogWriteStats WriteObservationsRawlog(LogReader& reader, const std::string& path) {
   mrpt::io::CMemoryStream buffer;
@@ -66,7 +67,7 @@ RawlogWriteStats WriteObservationsRawlog(LogReader& reader, const std::string& p
       archive << odometry;
       ++stats.odometry;
     }
-    archive << ToObservation(*scan, stats.scans);
+    archive << internal::ToMrptScan(*scan, stats.scans);
     ++stats.scans;
   }
   const auto* data = static_cast<const char*>(buffer.getRawBufferData());

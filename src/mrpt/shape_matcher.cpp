@@ -135,7 +135,7 @@ mrpt::poses::CPosePDF::Ptr CShapeMatcher::AlignPDF(
   const LaserScan scan_2 = PointsAsScan(MapPoints(m2, "m2"), Pose2(), options_.bearing_bin_rad);
   const std::optional<Pose2> guess =
       options_.use_initial_guess ? std::optional<Pose2>(guess_T_m1_m2) : std::nullopt;
-  ScanMatchResult result = MatchScans(scan_1, scan_2, guess, options_.params);
+  ScanMatchResult result = MatchScans(scan_1, scan_2, guess, ToScanMatchParams(options_.params));
   if (!options_.use_initial_guess && !result.converged) result.T_i_j = guess_T_m1_m2;
   // An estimate no refinement confirmed carries no information.
   const Eigen::Matrix3d covariance =

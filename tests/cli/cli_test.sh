@@ -32,6 +32,13 @@ for cmd in run extract match eval convert; do
   expect 0 "Usage: shape-slam $cmd" -- "$BIN" "$cmd" --help
 done
 expect 2 "unknown command" -- "$BIN" frobnicate
+expect 0 "--grid-resolution M" -- "$BIN" run --help
+expect 0 "map.simplemap" -- "$BIN" run --help
+# The version is CMake's project(VERSION).
+version=$(sed -n 's/^project(shape_slam VERSION \([0-9.]*\).*/\1/p' "$DATA/../../CMakeLists.txt")
+[ -n "$version" ] || fail "no project(VERSION) in CMakeLists.txt"
+expect 0 "^shape-slam ${version//./\\.}\$" -- "$BIN" --version
+expect 0 "^shape-slam ${version//./\\.}\$" -- "$BIN" version
 expect 2 "Usage" -- "$BIN"
 
 # extract and match on a small CARMEN log.
@@ -46,8 +53,32 @@ expect 2 "--guess" -- "$BIN" match "$LOG" --scan 0 --to 1 --guess 1 nan 0
 # convert, then map the converted rawlog; evaluate the run against itself (ATE 0).
 expect 0 "laser scans" -- "$BIN" convert "$LOG" "$WORK/head.rawlog"
 expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/head" --quiet
-for f in trajectory.tum map.polylines map.svg map.png stats.json; do
+for f in trajectory.tum map.polylines map.svg map.png map.pgm map.yaml map.gridmap map.simplemap \
+  stats.json; do
   [ -s "$WORK/head/$f" ] || fail "run did not write $f"
+done
+head -c 2 "$WORK/head/map.pgm" | grep -q P5 || fail "map.pgm is not a binary PGM"
+grep -qx "image: map.pgm" "$WORK/head/map.yaml" || fail "map.yaml does not name map.pgm"
+grep -qx "resolution: 0.05" "$WORK/head/map.yaml" || fail "map.yaml: default resolution not 0.05"
+grep -Eqx "origin: \[-?[0-9.e-]+, -?[0-9.e-]+, 0\.0\]" "$WORK/head/map.yaml" || fail "map.yaml origin"
+# The grid options: resolution, each output switched off, bad values (usage errors, exit 2).
+expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/coarse" --quiet --grid-resolution 0.1
+grep -qx "resolution: 0.1" "$WORK/coarse/map.yaml" || fail "--grid-resolution 0.1 not in map.yaml"
+[ "$(wc -c <"$WORK/coarse/map.pgm")" -lt "$(wc -c <"$WORK/head/map.pgm")" ] ||
+  fail "a coarser grid is not smaller"
+expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/nogrid" --quiet --no-grid --no-gridmap \
+  --no-simplemap
+for f in map.pgm map.yaml map.gridmap map.simplemap; do
+  [ ! -e "$WORK/nogrid/$f" ] || fail "--no-grid/--no-gridmap/--no-simplemap still wrote $f"
+done
+[ -s "$WORK/nogrid/map.polylines" ] || fail "--no-grid dropped map.polylines"
+expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/onlyros" --quiet --no-gridmap \
+  --no-simplemap
+[ -s "$WORK/onlyros/map.pgm" ] && [ ! -e "$WORK/onlyros/map.gridmap" ] &&
+  [ ! -e "$WORK/onlyros/map.simplemap" ] || fail "--no-gridmap --no-simplemap"
+for bad in -1 0 abc nan; do
+  expect 2 "grid-resolution.*'$bad'" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/o" \
+    --grid-resolution "$bad"
 done
 expect 0 "ATE \(RMSE\) +0\.0+ m" -- "$BIN" eval "$WORK/head/trajectory.tum" "$WORK/head/trajectory.tum"
 

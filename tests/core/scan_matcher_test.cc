@@ -136,8 +136,8 @@ TEST(ScanMatcherTest, InvalidParametersThrow) {
   std::mt19937 prng(1);
   const LaserScan scan =
       testing::SimulateScan(testing::OfficeRoom(), Pose2(2, 2, 0), ScannerModel{}, prng);
-  ShapeSlamParams params;
-  params.dce.threshold_m = -1.0;
+  ScanMatchParams params;
+  params.shapes.dce.threshold_m = -1.0;
   EXPECT_THROW(MatchScans(scan, scan, std::nullopt, params), std::invalid_argument);
 }
 

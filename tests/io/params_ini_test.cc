@@ -29,14 +29,14 @@ TEST(ParamsIniTest, DefaultIniInTheRepositoryIsTheDefaults) {
 
 TEST(ParamsIniTest, FormatThenParseRoundTrips) {
   ShapeSlamParams p;
-  p.dce.threshold_m = 0.0731;
+  p.shapes.dce.threshold_m = 0.0731;
   p.use_odometry = false;
   p.loop_closure.max_candidates = 7;
   p.matcher.skip_penalty_per_m = 1.0 / 3.0;
   p.scan_match_seeds = 4;
   const std::string text = FormatParamsIni(p);
   const ShapeSlamParams q = ParseParamsIni(text, "round-trip.ini");
-  EXPECT_EQ(q.dce.threshold_m, p.dce.threshold_m);
+  EXPECT_EQ(q.shapes.dce.threshold_m, p.shapes.dce.threshold_m);
   EXPECT_EQ(q.use_odometry, false);
   EXPECT_EQ(q.loop_closure.max_candidates, 7);
   EXPECT_EQ(q.matcher.skip_penalty_per_m, p.matcher.skip_penalty_per_m);  // bit-exact
@@ -46,8 +46,8 @@ TEST(ParamsIniTest, FormatThenParseRoundTrips) {
 TEST(ParamsIniTest, MissingKeysKeepTheirDefaultsAndCommentsAreIgnored) {
   const ShapeSlamParams p =
       ParseParamsIni("# comment\n[dce]\nthreshold_m = 0.08  ; inline\n\n", "x.ini");
-  EXPECT_EQ(p.dce.threshold_m, 0.08);
-  EXPECT_EQ(p.extraction.max_gap_m, ShapeSlamParams{}.extraction.max_gap_m);
+  EXPECT_EQ(p.shapes.dce.threshold_m, 0.08);
+  EXPECT_EQ(p.shapes.extraction.max_gap_m, ShapeSlamParams{}.shapes.extraction.max_gap_m);
 }
 
 TEST(ParamsIniTest, BrokenIniFilesNameTheProblem) {

@@ -114,10 +114,10 @@ TEST(MapCreation, DefaultsAreThePipelines) {
   const PolylineMapOptions options;
   const ShapeSlamParams pipeline;
   EXPECT_DOUBLE_EQ(options.creation.index_cell_size_m, pipeline.index_cell_size_m);
-  EXPECT_DOUBLE_EQ(options.insertion.alignment_dce_threshold_m, pipeline.alignment_dce_threshold_m);
-  EXPECT_DOUBLE_EQ(options.insertion.alignment_max_deviation_m, pipeline.alignment_max_deviation_m);
+  EXPECT_DOUBLE_EQ(options.insertion.alignment_dce_threshold_m, pipeline.shapes.alignment_dce_threshold_m);
+  EXPECT_DOUBLE_EQ(options.insertion.alignment_max_deviation_m, pipeline.shapes.alignment_max_deviation_m);
   EXPECT_DOUBLE_EQ(options.insertion.visibility_fov_margin_rad, pipeline.visibility_fov_margin_rad);
-  EXPECT_DOUBLE_EQ(options.insertion.extraction.max_gap_m, pipeline.extraction.max_gap_m);
+  EXPECT_DOUBLE_EQ(options.insertion.extraction.max_gap_m, pipeline.shapes.extraction.max_gap_m);
   EXPECT_DOUBLE_EQ(options.insertion.map_update.dce_threshold_m,
                    pipeline.map_update.dce_threshold_m);
   EXPECT_DOUBLE_EQ(options.insertion.visibility.max_range_m, pipeline.visibility.max_range_m);

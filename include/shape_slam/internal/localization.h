@@ -13,17 +13,7 @@
 
 namespace shape_slam::internal {
 
-/// A scan's polylines (sensor frame): as shape matching sees them, and finer for alignment.
-struct Shapes {
-  std::vector<Polyline> coarse;
-  std::vector<Polyline> fine;
-};
-
-/// Extraction (§3.1) and the two simplifications of one scan.
-Shapes ExtractShapes(const LaserScan& scan, const ShapeSlamParams& params);
-
-/// A polyline as shape matching sees it: DCE at the matching threshold, vertex count bounded.
-Polyline ForShapeMatching(const Polyline& polyline, const ShapeSlamParams& params);
+using Shapes = ScanShapes;
 
 /// Samples of the alignment polylines every spacing_m (§5.1).
 std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m);
@@ -39,7 +29,7 @@ Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams
 RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
                                   const std::vector<Polyline>& model, const Pose2& init,
                                   const std::optional<PosePrior>& prior,
-                                  const ShapeSlamParams& params);
+                                  const RefinementParams& refinement, double coarse_gate_m);
 
 /// Fraction of the samples within the grid's radius of the model at an estimate.
 double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
