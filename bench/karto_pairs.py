@@ -155,6 +155,7 @@ def run(args, karto):
             scans_of[log] = load_scans(args.log_dir, log, [p for (l, _), ps in groups.items()
                                                            if l == log for p in ps])
         scans = scans_of[log]
+        by_pair = {}  # (window, condition, a, b) -> outcome
         for w, (window, size_m, angle_deg) in enumerate(WINDOWS):
             limit = args.max_pairs_wide if w and args.max_pairs_wide else args.max_pairs
             pairs = spread(all_pairs, limit)
@@ -166,12 +167,28 @@ def run(args, karto):
                     estimate, ms = matcher.match(scans[a], scans[b], guess)
                     e = between(truth, estimate)
                     outcomes.append((math.hypot(e[0], e[1]), abs(math.degrees(e[2])), ms))
+                    by_pair[(window, condition, a, b)] = outcomes[-1]
                     detail.append([log, gap, window, condition, a, b, *estimate, *outcomes[-1]])
                 summary.append(row_stats(log, gap, window, condition, outcomes))
                 print(f"{log} gap {gap} {window} {condition}: {len(outcomes)} pairs, "
                       f"{summary[-1]['success_pct']:.1f} % within 10 cm / 2 deg",
                       file=sys.stderr, flush=True)
+        summary += same_pairs_rows(log, gap, by_pair, spread(all_pairs, args.max_pairs_wide),
+                                   conditions) if args.max_pairs_wide else []
     return summary, detail
+
+
+def same_pairs_rows(log, gap, by_pair, wide_pairs, conditions):
+    """The 2 m window's results on the (fewer) pairs of the 4 m window, for a like-for-like
+    comparison when --max-pairs-wide is smaller than --max-pairs."""
+    window = WINDOWS[0][0]
+    rows = []
+    for condition, _ in conditions:
+        outcomes = [by_pair.get((window, condition, a, b)) for a, b, *_ in wide_pairs]
+        if all(outcomes) and len(outcomes) < sum(1 for k in by_pair if k[:2] == (window,
+                                                                                  condition)):
+            rows.append(row_stats(log, gap, window + " (the 4 m pairs)", condition, outcomes))
+    return rows
 
 
 def row_stats(log, gap, window, condition, outcomes):
