@@ -4,6 +4,7 @@ N scans of a log (with its reference poses and relations) for the --quick run.
 The reader that matters is shape-slam's own (src/io/carmen_reader.cpp); this one is a fallback
 and its results are checked against the scan count `shape-slam convert` reports."""
 import gzip
+import math
 
 from atomic import write_text
 
@@ -78,3 +79,91 @@ def write_subset_by_stamps(path, out_path, stamps, columns):
                 lines.append(line if line.endswith("\n") else line + "\n")
     write_text(out_path, "".join(lines))
     return len(lines)
+
+
+# --- scans, for the peers that read the log themselves (KISS-ICP) -----------------------------
+
+# The no-return rule of shape-slam's reader (src/io/carmen_reader.cpp, LargestReadings).
+NO_RETURN_BAND_M = 0.005
+MIN_NO_RETURN_VALUE_M = 20.0
+MIN_NO_RETURN_FRACTION = 0.001
+
+
+def flaser_angles_rad(n):
+    """FLASER beam directions (datasets/radish/README.md): beam 0 at -90 deg, step 180 deg / n
+    for even n, 180 deg / (n - 1) for odd n."""
+    intervals = n if n % 2 == 0 else max(n - 1, 1)
+    return [-math.pi / 2 + i * math.pi / intervals for i in range(n)]
+
+
+def _params(fields, params):
+    if len(fields) >= 3 and fields[1] not in params:  # the first value wins
+        try:
+            params[fields[1]] = float(fields[2])
+        except ValueError:
+            pass
+
+
+def max_range_m(path):
+    """The FLASER maximum range as shape-slam's reader derives it: PARAM
+    laser_front_laser_max_range, else robot_front_laser_max, else the largest reading minus
+    0.005 m when at least 0.1 % of the readings are within 0.005 m of it and it is >= 20 m (a
+    no-return value), else the largest reading + 1 m."""
+    params, readings = {}, []
+    with _open_text(path) as f:
+        for line in f:
+            fields = line.split()
+            if not fields:
+                continue
+            if fields[0] == "PARAM":
+                _params(fields, params)
+            elif fields[0] == "FLASER":
+                try:
+                    values = [float(v) for v in fields[2:2 + int(fields[1])]]
+                except ValueError:
+                    continue
+                readings += [r for r in values if r >= 0.0]
+    for name in ("laser_front_laser_max_range", "robot_front_laser_max"):
+        if params.get(name, 0.0) > 0.0:
+            return params[name]
+    if not readings:
+        return 1.0
+    largest = max(readings)
+    near = sum(1 for r in readings if r >= largest - NO_RETURN_BAND_M)
+    no_return = (largest >= MIN_NO_RETURN_VALUE_M
+                 and near >= MIN_NO_RETURN_FRACTION * len(readings))
+    return largest - NO_RETURN_BAND_M if no_return else largest + 1.0
+
+
+def read_scans(path):
+    """[(timestamp, angles_rad, ranges_m, max_range_m)] of the log's laser scans in order
+    (ROBOTLASER1 if the log has any, else FLASER), like scan_stamps; malformed records are
+    skipped. A range is valid when finite, > 0 and < max_range_m."""
+    scans = {"FLASER": [], "ROBOTLASER1": []}
+    flaser_max = None
+    with _open_text(path) as f:
+        for line in f:
+            fields = line.split()
+            if not fields or fields[0] not in scans:
+                continue
+            t = _scan_stamp(fields)
+            if t is None:
+                continue
+            try:
+                if fields[0] == "FLASER":
+                    n = int(fields[1])
+                    ranges = [float(v) for v in fields[2:2 + n]]
+                    angles, max_r = flaser_angles_rad(n), None
+                else:
+                    start, res, max_r = float(fields[2]), float(fields[4]), float(fields[5])
+                    n = int(fields[8])
+                    ranges = [float(v) for v in fields[9:9 + n]]
+                    angles = [start + i * res for i in range(n)]
+            except (ValueError, IndexError):
+                continue
+            scans[fields[0]].append((t, angles, ranges, max_r))
+    if scans["ROBOTLASER1"]:
+        return scans["ROBOTLASER1"]
+    if scans["FLASER"]:
+        flaser_max = max_range_m(path)
+    return [(t, a, r, flaser_max) for t, a, r, _ in scans["FLASER"]]

@@ -1,0 +1,253 @@
+"""Harder copies of a CARMEN log for the benchmark, with reference poses and relations derived
+consistently (bench/README.md, "Variants").
+
+  zero-odom   every ODOM and FLASER pose (and ODOM velocity) set to 0; ranges and timestamps
+              kept: how logs without odometry look
+  every2      every 2nd laser scan (scans 0, 2, 4, ...); ODOM records kept
+  noisy-odom  odometry increments with added random-walk noise (fixed seed)
+  half-beams  every 2nd beam (FLASER n -> n/2 readings, the same 180 deg field of view)
+  fov120      only the beams within the central 120 deg, written as ROBOTLASER1 records
+              (FLASER cannot say a field of view other than 180 deg)
+
+Reference poses: those of the scans kept. Relations: those whose two timestamps are both kept;
+for every2 the consecutive-scan relations of the kept scans are the composition of the two
+original consecutive relations across the dropped scan (the local block stays measured)."""
+import math
+import random
+
+import carmen
+from atomic import write_text
+
+NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120"]
+
+NOISE_SEED = 20261201
+NOISE_TRANS_M_PER_SQRT_M = 0.05  # std of the translation noise (along and across) after 1 m
+NOISE_ROT_DEG_PER_SQRT_M = 2.0  # std of the heading noise after 1 m of travel
+NOISE_ROT_DEG_PER_SQRT_RAD = 2.0  # std of the heading noise after turning 1 rad
+FOV_DEG = 120.0
+
+
+class VariantError(Exception):
+    pass
+
+
+# --- small pose algebra ------------------------------------------------------------------------
+
+def compose(a, b):
+    """a ⊕ b for (x, y, theta)."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    return (a[0] + c * b[0] - s * b[1], a[1] + s * b[0] + c * b[1],
+            math.atan2(math.sin(a[2] + b[2]), math.cos(a[2] + b[2])))
+
+
+def between(a, b):
+    """a^-1 ⊕ b: the motion from a to b in a's frame."""
+    c, s = math.cos(a[2]), math.sin(a[2])
+    dx, dy = b[0] - a[0], b[1] - a[1]
+    return (c * dx + s * dy, -s * dx + c * dy, math.atan2(math.sin(b[2] - a[2]),
+                                                          math.cos(b[2] - a[2])))
+
+
+def fmt(v):
+    return f"{v:.6f}"
+
+
+# --- records -----------------------------------------------------------------------------------
+
+def _records(path):
+    with carmen._open_text(path) as f:
+        return [line.rstrip("\n").split() for line in f]
+
+
+def _flaser_n(fields):
+    return int(fields[1])
+
+
+def _pose_slots(fields):
+    """Indices of the pose fields of an ODOM or FLASER record: [(x, y, theta) index triples]."""
+    if fields[0] == "ODOM":
+        return [(1, 2, 3)]
+    n = _flaser_n(fields)
+    return [(2 + n, 3 + n, 4 + n), (5 + n, 6 + n, 7 + n)]
+
+
+def _check_flaser_only(records, path):
+    if any(f and f[0] == "ROBOTLASER1" for f in records):
+        raise VariantError(f"{path}: ROBOTLASER1 logs are not supported by the variants")
+    if not any(f and f[0] == "FLASER" for f in records):
+        raise VariantError(f"{path}: no FLASER record")
+
+
+def zero_odom(records):
+    out = []
+    for f in records:
+        if f and f[0] in ("ODOM", "FLASER"):
+            f = list(f)
+            for slot in _pose_slots(f):
+                for i in slot:
+                    f[i] = "0.000000"
+            if f[0] == "ODOM":
+                f[4:7] = ["0.000000"] * 3  # tv rv accel
+        out.append(f)
+    return out
+
+
+def every2(records):
+    out, k = [], 0
+    for f in records:
+        if f and f[0] == "FLASER":
+            k += 1
+            if (k - 1) % 2:
+                continue
+        out.append(f)
+    return out
+
+
+def _noisy_increment(rng, d):
+    dist = math.hypot(d[0], d[1])
+    sigma_t = NOISE_TRANS_M_PER_SQRT_M * math.sqrt(dist)
+    sigma_r = math.radians(math.sqrt(NOISE_ROT_DEG_PER_SQRT_M ** 2 * dist
+                                     + NOISE_ROT_DEG_PER_SQRT_RAD ** 2 * abs(d[2])))
+    return (d[0] + rng.gauss(0.0, sigma_t), d[1] + rng.gauss(0.0, sigma_t),
+            d[2] + rng.gauss(0.0, sigma_r))
+
+
+def noisy_odom(records):
+    """Every odometry pose (ODOM x y theta, FLASER odom_x..) in file order is one step of the
+    odometry; each increment gets Gaussian noise whose variance grows linearly with the distance
+    and the turn (a random walk: the same drift whatever the record rate). The FLASER laser pose
+    keeps its offset from the odometry pose."""
+    rng = random.Random(NOISE_SEED)
+    out, raw_prev, noisy_prev = [], None, None
+    for f in records:
+        if not f or f[0] not in ("ODOM", "FLASER"):
+            out.append(f)
+            continue
+        f = list(f)
+        odom_slot = _pose_slots(f)[-1]
+        raw = tuple(float(f[i]) for i in odom_slot)
+        noisy = raw if raw_prev is None else compose(
+            noisy_prev, _noisy_increment(rng, between(raw_prev, raw)))
+        if f[0] == "FLASER":
+            laser_slot = _pose_slots(f)[0]
+            laser = tuple(float(f[i]) for i in laser_slot)
+            for i, v in zip(laser_slot, compose(noisy, between(raw, laser))):
+                f[i] = fmt(v)
+        for i, v in zip(odom_slot, noisy):
+            f[i] = fmt(v)
+        raw_prev, noisy_prev = raw, noisy
+        out.append(f)
+    return out
+
+
+def half_beams(records):
+    out = []
+    for f in records:
+        if f and f[0] == "FLASER":
+            n = _flaser_n(f)
+            if n % 2:
+                raise VariantError(f"half-beams needs an even beam count, got FLASER {n}")
+            f = ["FLASER", str(n // 2), *f[2:2 + n:2], *f[2 + n:]]
+        out.append(f)
+    return out
+
+
+def _frontlaser_offset_m(records):
+    for f in records:
+        if len(f) >= 3 and f[0] == "PARAM" and f[1] == "robot_frontlaser_offset":
+            return float(f[2])
+    return 0.0
+
+
+def fov120(records, max_range_m):
+    """FLASER -> ROBOTLASER1 with the beams within +-FOV_DEG/2 (the FLASER beam angles of
+    datasets/radish/README.md); max_range is the log's no-return value (carmen.max_range_m)."""
+    offset = _frontlaser_offset_m(records)
+    out = []
+    for f in records:
+        if not f or f[0] != "FLASER":
+            out.append(f)
+            continue
+        n = _flaser_n(f)
+        angles = carmen.flaser_angles_rad(n)
+        step = angles[1] - angles[0] if n > 1 else math.pi
+        half = math.radians(FOV_DEG / 2) + 1e-9
+        keep = [i for i, a in enumerate(angles) if abs(a) <= half]
+        ranges = [f[2 + i] for i in keep]
+        robot = tuple(float(v) for v in f[5 + n:8 + n])
+        laser = compose(robot, (offset, 0.0, 0.0))
+        stamp, host, logger = f[8 + n:11 + n]
+        out.append(["ROBOTLASER1", "0", fmt(angles[keep[0]]),
+                    fmt(angles[keep[-1]] - angles[keep[0]]), fmt(step), fmt(max_range_m),
+                    "0.01", "0", str(len(ranges)), *ranges, "0", *map(fmt, laser),
+                    *map(fmt, robot), "0", "0", "0", "0", "0", stamp, host, logger])
+    return out
+
+
+# --- reference files ---------------------------------------------------------------------------
+
+def _read_relations(path):
+    rows = []
+    with open(path) as f:
+        for line in f:
+            v = line.split()
+            if len(v) >= 8 and not v[0].startswith("#"):
+                rows.append((float(v[0]), float(v[1]), float(v[2]), float(v[3]), float(v[7])))
+    return rows
+
+
+def _write_relations(path, rows):
+    write_text(path, "".join(f"{t1:.6f} {t2:.6f} {x:.6f} {y:.6f} 0 0 0 {th:.6f}\n"
+                             for t1, t2, x, y, th in rows))
+
+
+def every2_relations(relations_path, out_path, all_stamps, kept_stamps):
+    """Local relations of the kept scans by composing the two original local relations across
+    the dropped scan, then every original relation whose two timestamps are kept."""
+    rows = _read_relations(relations_path)
+    key = lambda t: round(t, 6)  # noqa: E731
+    by_pair = {(key(r[0]), key(r[1])): r for r in rows}
+    kept = {key(t) for t in kept_stamps}
+    order = [key(t) for t in all_stamps]
+    local = []
+    for a, b, c in zip(order, order[1:], order[2:]):
+        if a not in kept or c not in kept or (a, b) not in by_pair or (b, c) not in by_pair:
+            continue
+        r1, r2 = by_pair[(a, b)], by_pair[(b, c)]
+        x, y, th = compose(r1[2:], r2[2:])
+        local.append((r1[0], r2[1], x, y, th))
+    rest = [r for r in rows if key(r[0]) in kept and key(r[1]) in kept]
+    _write_relations(out_path, local + rest)
+    return len(local) + len(rest)
+
+
+# --- a variant on disk --------------------------------------------------------------------------
+
+def write_variant(name, log_path, gt_path, relations_path, out_stem):
+    """Writes out_stem.log (and .gt.txt / .relations when the source has them). Returns the
+    path of the log."""
+    if name not in NAMES:
+        raise VariantError(f"unknown variant '{name}'; known: {', '.join(NAMES)}")
+    records = _records(log_path)
+    _check_flaser_only(records, log_path)
+    if name == "zero-odom":
+        out = zero_odom(records)
+    elif name == "every2":
+        out = every2(records)
+    elif name == "noisy-odom":
+        out = noisy_odom(records)
+    elif name == "half-beams":
+        out = half_beams(records)
+    else:
+        out = fov120(records, carmen.max_range_m(log_path))
+    log_out = out_stem + ".log"
+    write_text(log_out, "".join(" ".join(f) + "\n" for f in out))
+    all_stamps, kept = carmen.scan_stamps(log_path), carmen.scan_stamps(log_out)
+    if gt_path:
+        carmen.write_subset_by_stamps(gt_path, out_stem + ".gt.txt", kept, 1)
+    if relations_path:
+        if name == "every2":
+            every2_relations(relations_path, out_stem + ".relations", all_stamps, kept)
+        else:
+            carmen.write_subset_by_stamps(relations_path, out_stem + ".relations", kept, 2)
+    return log_out
