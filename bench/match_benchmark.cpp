@@ -163,7 +163,7 @@ double MsSince(Clock::time_point t0) {
 // Both methods on one pair from one condition's guess: (ShapeSLAM, MRPT CICP) outcomes.
 std::pair<Outcome, Outcome> MatchPair(const LaserScan& a, const LaserScan& b, const Pose2& truth,
                                       const Condition& c, std::mt19937& rng,
-                                      const shape_slam::ShapeSlamParams& params) {
+                                      const shape_slam::ScanMatchParams& params) {
   std::optional<Pose2> guess;
   Pose2 icp_guess;  // CICP needs a guess: identity when there is none
   if (c.trans_m >= 0.0) {
@@ -189,7 +189,7 @@ std::pair<Outcome, Outcome> MatchPair(const LaserScan& a, const LaserScan& b, co
 // Rows (ShapeSLAM, CICP) per condition for the pairs of one log and gap.
 std::vector<Row> RunPairs(const std::string& log, int gap, const std::vector<LaserScan>& scans,
                           const std::vector<Pair>& pairs,
-                          const shape_slam::ShapeSlamParams& params) {
+                          const shape_slam::ScanMatchParams& params) {
   std::mt19937 rng(12345 + gap);
   std::vector<Row> rows;
   for (const Condition& c : kConditions) {
