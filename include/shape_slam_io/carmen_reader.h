@@ -23,10 +23,12 @@
 //
 // FLASER max range: FLASER gives none, so when no PARAM does, it is found from the data. Let L
 // be the largest reading of the log's well-formed FLASER records. If L >= 20 m and at least
-// 0.1 % of all their readings lie within 0.005 m of L, those readings are the scanner's "no
-// return" value and max_range_m = L - 0.005 (so that `r >= max_range_m` flags them); otherwise
-// max_range_m = L + 1 (nothing flagged). Radish logs use 50 (aces), 81.83 (intel) and 81.91
-// (freiburg-079) for "no return".
+// 0.1 % of all their readings lie within max(0.005 m, 0.5 % of L) below L, those readings are
+// the scanner's "no return" value and max_range_m = (the smallest of them reached from L in
+// steps of at most 0.05 m) - 0.005 (so that
+// `r >= max_range_m` flags them); otherwise max_range_m = L + 1 (nothing flagged). Radish logs
+// use 50 (aces), 81.83 (intel), 81.91 (freiburg-079) and 51.01-51.16 (infinite-corridor) for
+// "no return".
 //
 // Readings: NaN, inf or negative readings become NaN ("no reading") and are counted in
 // LogReaderStats::invalid_ranges. Numbers are parsed independently of the C locale.

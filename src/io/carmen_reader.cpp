@@ -17,7 +17,9 @@ namespace {
 constexpr std::size_t kMaxReadings = 100000;      // more is not a laser scan but garbage
 constexpr std::size_t kReadChunkBytes = 1 << 18;  // bytes read from zlib at a time
 constexpr std::size_t kMaxLineBytes = 1 << 24;    // 16 MiB: far above any real record
-constexpr double kNoReturnBand_m = 0.005;         // "within 0.005 m of the largest reading"
+constexpr double kNoReturnBand_m = 0.005;         // "within 0.005 m or 0.5 % of the largest reading"
+constexpr double kNoReturnBandFraction = 0.005;
+constexpr double kNoReturnStep_m = 0.05;          // no-return values are this close to each other
 constexpr double kMinNoReturnValue_m = 20.0;      // smaller maxima are real readings
 constexpr double kMinNoReturnFraction = 0.001;    // 0.1 % of all readings
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
@@ -362,7 +364,7 @@ std::optional<ParamValue> ParseParam(const std::vector<std::string_view>& tokens
 // ---------------------------------------------------------------------------------------------
 // The survey pass.
 
-/// The largest FLASER reading and the readings within kNoReturnBand_m of it.
+/// The largest FLASER reading and the readings within the no-return band below it.
 class LargestReadings {
  public:
   void Add(double range_m) {
@@ -370,11 +372,11 @@ class LargestReadings {
     ++total_;
     if (range_m > largest_m_) {
       largest_m_ = range_m;
-      const double floor_m = largest_m_ - kNoReturnBand_m;
+      const double floor_m = largest_m_ - Band();
       near_.erase(std::remove_if(near_.begin(), near_.end(), [&](double r) { return r < floor_m; }),
                   near_.end());
     }
-    if (range_m >= largest_m_ - kNoReturnBand_m) near_.push_back(range_m);
+    if (range_m >= largest_m_ - Band()) near_.push_back(range_m);
   }
 
   /// The max range rule of carmen_reader.h.
@@ -383,10 +385,19 @@ class LargestReadings {
     const bool no_return_value =
         largest_m_ >= kMinNoReturnValue_m &&
         static_cast<double>(near_.size()) >= kMinNoReturnFraction * static_cast<double>(total_);
-    return no_return_value ? largest_m_ - kNoReturnBand_m : largest_m_ + 1.0;
+    if (!no_return_value) return largest_m_ + 1.0;
+    // The no-return values: from L down while consecutive values lie within kNoReturnStep_m.
+    std::vector<double> values = near_;
+    std::sort(values.rbegin(), values.rend());
+    std::size_t k = 0;
+    while (k + 1 < values.size() && values[k] - values[k + 1] <= kNoReturnStep_m) ++k;
+    return values[k] - kNoReturnBand_m;
   }
 
  private:
+  // Scanners report "no return" as a value that varies a little (51.05-51.16 m on one log).
+  double Band() const { return std::max(kNoReturnBand_m, kNoReturnBandFraction * largest_m_); }
+
   double largest_m_ = 0.0;
   std::size_t total_ = 0;
   std::vector<double> near_;

@@ -191,6 +191,20 @@ std::string LogWithReadings(int scans, int readings_at_25m) {
   return log.str();
 }
 
+// Some scanners report "no return" as values that vary a little (51.05-51.16 m on the infinite
+// corridor): all of them are flagged, a real reading 0.2 m below them is not.
+TEST(CarmenReaderTest, NoReturnValuesThatVaryALittleAreAllFlagged) {
+  TempDir dir;
+  std::ostringstream log;
+  const double values[] = {51.05, 51.06, 51.11, 51.16, 50.86, 1.5, 1.5, 1.5};
+  for (int k = 0; k < 20; ++k) {
+    log << "FLASER 100";
+    for (int i = 0; i < 100; ++i) log << ' ' << (i < 8 && (k == 0 || i < 4) ? values[i] : 1.5);
+    log << " 0 0 0 0 0 0 " << k << " host " << k << "\n";
+  }
+  EXPECT_NEAR(CarmenReader(dir.Write("varying.log", log.str())).flaser_max_range_m(), 51.045, 1e-9);
+}
+
 TEST(CarmenReaderTest, MaxRangeRuleNeedsFrequentLargeReadings) {
   TempDir dir;
   // 3 of 2000 readings (0.15 %) at the largest value: "no return" readings.
