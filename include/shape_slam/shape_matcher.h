@@ -56,6 +56,11 @@ struct ShapeMatcherParams {
   /// against the whole model, associating samples within seed_capture_distance_m (metres).
   int seed_icp_iterations = 6;
   double seed_capture_distance_m = 0.5;
+  /// ICP steps of a seed's induced alignment on its own pair (InducedAlignment): it only needs
+  /// to be roughly right, the steps above finish it.
+  int seed_alignment_iterations = 10;
+  /// Spacing of the samples that score seeds and final fits, metres.
+  double fit_sample_spacing_m = 0.2;
   /// Without an estimate, candidates are ranked by inlier ratio - rotation_prior_weight *
   /// (theta / pi)^2: between equally good fits (symmetric places) the smaller turn wins.
   double rotation_prior_weight = 0.1;

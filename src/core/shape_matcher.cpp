@@ -9,7 +9,7 @@
 
 #include "shape_slam/geometry.h"
 #include "shape_slam/evaluation.h"
-#include "shape_slam/internal/model_icp.h"
+#include "shape_slam/candidate_selection.h"
 
 namespace shape_slam {
 namespace {
@@ -254,26 +254,34 @@ AlignmentResult AlignMatches(const ShapeMatchInput& input, const std::vector<Gro
 }
 
 // Scores estimates by the fraction of the scan's samples near the model, and finishes rough ones
-// by a few ICP steps against the whole model (internal/model_icp.h).
+// by a few ICP steps against the whole model: the candidate selection (candidate_selection.h)
+// with the seed settings, on samples every fit_sample_spacing_m.
 class FitScorer {
  public:
   FitScorer(const ShapeMatchInput& input, const ShapeMatcherParams& params)
-      : icp_(input.model, std::max(params.seed_capture_distance_m, params.inlier_distance_m),
-             params.inlier_distance_m) {
+      : selector_(input.model, SeedSelection(params)) {
     for (const Polyline& polyline : AlignmentPolylines(input)) {
-      for (const DirectedSample& s : SampleWithDirections(polyline, kSpacing)) {
+      for (const DirectedSample& s : SampleWithDirections(polyline, params.fit_sample_spacing_m)) {
         samples_.push_back(s.point);
       }
     }
   }
-  double InlierRatio(const Pose2& T_model_scan) const { return icp_.InlierRatio(samples_, T_model_scan); }
-  Pose2 QuickAlign(const Pose2& T_model_scan, int iterations) const {
-    return icp_.Align(samples_, T_model_scan, iterations);
+  double InlierRatio(const Pose2& T_model_scan) const { return selector_.Fit(samples_, T_model_scan); }
+  // The estimates finished and ordered best fit first (ties: nearer the reference).
+  std::vector<RankedCandidate> Rank(const std::vector<Pose2>& estimates, const Pose2& reference) const {
+    return selector_.Rank(samples_, estimates, reference);
   }
 
  private:
-  static constexpr double kSpacing = 0.2;  // metres
-  internal::ModelIcp icp_;
+  static CandidateSelectionParams SeedSelection(const ShapeMatcherParams& params) {
+    CandidateSelectionParams selection;
+    selection.icp_iterations = params.seed_icp_iterations;
+    selection.capture_distance_m = params.seed_capture_distance_m;
+    selection.inlier_distance_m = params.inlier_distance_m;
+    selection.equally_good_fit = 0.0;  // the fit alone orders the seeds
+    return selection;
+  }
+  CandidateSelector selector_;
   std::vector<Point2> samples_;
 };
 
@@ -327,9 +335,6 @@ std::vector<Seed> MostReliablePairs(const ShapeMatchInput& input,
   return chosen;
 }
 
-// A seed's induced alignment only needs to be roughly right: QuickAlign finishes it.
-constexpr int kSeedAlignmentIterations = 10;
-
 // Candidate estimates of §4.3: the alignments induced by the most reliable pairs, pre-scored by
 // their fit so that only the best num_seeds go through the second pass, then the caller's hints.
 struct Candidate {
@@ -348,22 +353,26 @@ std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
                                       const FitScorer& scorer) {
   const CorrespondenceSolution first =
       SolvePass(input, params, evaluator, std::nullopt, params.first_pass_group_size, 0.0);
-  std::vector<Candidate> candidates;
+  std::vector<Pose2> induced_poses;
+  std::vector<double> reliabilities;
   for (const Seed& seed : MostReliablePairs(input, first, params, evaluator)) {
     AlignmentParams quick = params.alignment;
-    quick.max_iterations = std::min(quick.max_iterations, kSeedAlignmentIterations);
+    quick.max_iterations = std::min(quick.max_iterations, params.seed_alignment_iterations);
     const AlignmentResult induced =
         InducedAlignment(input.scan[seed.scan], input.model[seed.model], quick);
-    const bool duplicate = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) {
-      return SameEstimate(c.T_model_scan, induced.T_map_scan);
+    const bool duplicate = std::any_of(induced_poses.begin(), induced_poses.end(), [&](const Pose2& p) {
+      return SameEstimate(p, induced.T_map_scan);
     });
     if (duplicate) continue;
-    const Pose2 aligned = scorer.QuickAlign(induced.T_map_scan, params.seed_icp_iterations);
-    candidates.push_back({aligned, seed.reliability, scorer.InlierRatio(aligned)});
+    induced_poses.push_back(induced.T_map_scan);
+    reliabilities.push_back(seed.reliability);
   }
-  std::stable_sort(candidates.begin(), candidates.end(),
-                   [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
-  if (static_cast<int>(candidates.size()) > params.num_seeds) candidates.resize(params.num_seeds);
+  std::vector<Candidate> candidates;
+  const Pose2 reference = input.hint_estimates.empty() ? Pose2() : input.hint_estimates.front();
+  for (const RankedCandidate& r : scorer.Rank(induced_poses, reference)) {
+    if (static_cast<int>(candidates.size()) >= params.num_seeds) break;
+    candidates.push_back({r.T_model_scan, reliabilities[r.index], r.fit});
+  }
   for (const Pose2& hint : input.hint_estimates) candidates.push_back({hint});
   return candidates;
 }
@@ -380,26 +389,24 @@ double SelectionScore(const ShapeMatchResult& result, const ShapeMatcherParams& 
 // SelectionScore, then lowest eq. (4) cost).
 ShapeMatchResult MatchWithoutGuess(const ShapeMatchInput& input, const ShapeMatcherParams& params,
                                    PairEvaluator& evaluator, const FitScorer& scorer) {
-  ShapeMatchResult best;
-  bool have_best = false;
-  double best_score = 0.0;
+  std::vector<ShapeMatchResult> results;
+  std::vector<double> scores, costs;
   for (const Candidate& candidate : SeedCandidates(input, params, evaluator, scorer)) {
     CorrespondenceSolution second =
         SolvePass(input, params, evaluator, candidate.T_model_scan, params.max_group_size,
                   params.seeded_max_misfit_m);
-    ShapeMatchResult result = Finish(input, params, scorer, std::move(second), candidate.T_model_scan);
-    result.reliability = candidate.reliability;
-    const double score = SelectionScore(result, params);
-    const bool better = !have_best || score > best_score + 1e-12 ||
-                        (std::abs(score - best_score) <= 1e-12 && result.total_cost < best.total_cost);
-    if (better) {
-      best = std::move(result);
-      best_score = score;
-      have_best = true;
-    }
+    results.push_back(Finish(input, params, scorer, std::move(second), candidate.T_model_scan));
+    results.back().reliability = candidate.reliability;
+    scores.push_back(SelectionScore(results.back(), params));
+    costs.push_back(results.back().total_cost);
   }
-  if (!have_best) best.inlier_ratio = scorer.InlierRatio(best.T_model_scan);
-  return best;
+  if (results.empty()) {
+    ShapeMatchResult none;
+    none.inlier_ratio = scorer.InlierRatio(none.T_model_scan);
+    return none;
+  }
+  // The candidate selection's order: best score; between equal scores, the lower eq. (4) cost.
+  return std::move(results[OrderByFit(scores, costs, 1e-12).front()]);
 }
 
 // Points at equal fractions of the arc length of a polyline (both ends included).
@@ -457,6 +464,10 @@ void ShapeMatcherParams::Validate() const {
     throw std::invalid_argument("ShapeMatcherParams::seed_icp_iterations must be >= 0");
   }
   positive(seed_capture_distance_m, "seed_capture_distance_m");
+  positive(fit_sample_spacing_m, "fit_sample_spacing_m");
+  if (seed_alignment_iterations < 1) {
+    throw std::invalid_argument("ShapeMatcherParams::seed_alignment_iterations must be >= 1");
+  }
   if (num_seeds < 1) throw std::invalid_argument("ShapeMatcherParams::num_seeds must be >= 1");
   if (max_seed_pairs < 1) {
     throw std::invalid_argument("ShapeMatcherParams::max_seed_pairs must be >= 1");
