@@ -123,6 +123,24 @@ if [ -f "$SEGV_LOG" ] && [ "$sanitized" = "0" ]; then
   expect 1 "fatal signal.*reading the log" -- "$BIN" extract "$SEGV_LOG" --scan 0
 fi
 
+# A log whose odometry is all zero (how real logs without odometry look): noticed, said on
+# stderr and in stats.json, mapped by shape alone.
+awk '$1 == "ODOM" { $2 = 0; $3 = 0; $4 = 0 }
+     $1 == "FLASER" { n = $2; for (i = n + 3; i <= n + 8; ++i) $i = 0 } { print }' "$LOG" \
+  >"$WORK/zero-odom.log"
+expect 0 "odometry never changes" -- "$BIN" run "$WORK/zero-odom.log" --out "$WORK/zero" --quiet
+grep -q '"status": *"constant"' "$WORK/zero/stats.json" || fail "stats.json: odometry not 'constant'"
+expect 0 "" -- "$BIN" run "$LOG" --out "$WORK/moving" --quiet
+grep -q '"status": *"used"' "$WORK/moving/stats.json" || fail "stats.json: odometry not 'used'"
+# Fewer than 90 % of the scans matched: a warning with the count, and the flag in stats.json.
+printf '[pipeline]\nmin_inlier_ratio = 1.0\n' >"$WORK/never-trusted.ini"
+expect 0 "warning: only [0-9]+ of [0-9]+ scans" -- \
+  "$BIN" run "$LOG" --config "$WORK/never-trusted.ini" --out "$WORK/untrusted" --quiet
+grep -q '"low_match_warning": *true' "$WORK/untrusted/stats.json" || fail "stats.json: no low_match_warning"
+# eval warns when it associates fewer than 90 % of the reference poses.
+head -n 2 "$WORK/moving/trajectory.tum" >"$WORK/short.tum"
+expect 0 "warning: only 1 of 3 reference poses" -- "$BIN" eval "$WORK/short.tum" "$WORK/moving/trajectory.tum"
+
 # A failed run leaves earlier results in the output directory untouched.
 mkdir -p "$WORK/keep"
 echo "precious" >"$WORK/keep/trajectory.tum"
