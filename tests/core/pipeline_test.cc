@@ -158,3 +158,30 @@ TEST(PipelineTest, ScansWithoutPointsAndMalformedScans) {
 
 }  // namespace
 }  // namespace shape_slam
+
+namespace shape_slam {
+namespace {
+
+// `shape-slam match` and the mapper agree: the mapper's defaults give the registration's.
+TEST(ToScanMatchParamsTest, MapperDefaultsGiveTheRegistrationDefaults) {
+  const ScanMatchParams from_mapper = ToScanMatchParams(ShapeSlamParams{});
+  const ScanMatchParams defaults;
+  EXPECT_EQ(from_mapper.seed_pairs, defaults.seed_pairs);
+  EXPECT_EQ(from_mapper.seeds, defaults.seeds);
+  EXPECT_EQ(from_mapper.coarse_gate_m, defaults.coarse_gate_m);
+  EXPECT_EQ(from_mapper.min_inlier_ratio, defaults.min_inlier_ratio);
+  EXPECT_EQ(from_mapper.window_search.half_window_rad, defaults.window_search.half_window_rad);
+  EXPECT_EQ(from_mapper.window_search.half_window_m, defaults.window_search.half_window_m);
+  EXPECT_EQ(from_mapper.window_search_spacing_m, defaults.window_search_spacing_m);
+  EXPECT_EQ(from_mapper.shapes.dce.threshold_m, defaults.shapes.dce.threshold_m);
+  EXPECT_EQ(from_mapper.shapes.extraction.gap_beam_spacing_factor,
+            defaults.shapes.extraction.gap_beam_spacing_factor);
+  ShapeSlamParams changed;
+  changed.scan_match_seed_pairs = 7;
+  changed.shapes.dce.threshold_m = 0.08;
+  EXPECT_EQ(ToScanMatchParams(changed).seed_pairs, 7);
+  EXPECT_EQ(ToScanMatchParams(changed).shapes.dce.threshold_m, 0.08);
+}
+
+}  // namespace
+}  // namespace shape_slam
