@@ -267,9 +267,8 @@ class FitScorer {
     }
   }
   double InlierRatio(const Pose2& T_model_scan) const { return selector_.Fit(samples_, T_model_scan); }
-  // The estimates finished and ordered best fit first (ties: nearer the reference).
-  std::vector<RankedCandidate> Rank(const std::vector<Pose2>& estimates, const Pose2& reference) const {
-    return selector_.Rank(samples_, estimates, reference);
+  Pose2 QuickAlign(const Pose2& T_model_scan) const {
+    return selector_.QuickAlign(samples_, T_model_scan, selector_.Params().icp_iterations);
   }
 
  private:
@@ -353,26 +352,25 @@ std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
                                       const FitScorer& scorer) {
   const CorrespondenceSolution first =
       SolvePass(input, params, evaluator, std::nullopt, params.first_pass_group_size, 0.0);
-  std::vector<Pose2> induced_poses;
-  std::vector<double> reliabilities;
+  // Each seed's induced alignment finished by the candidate selection's quick ICP; a seed that
+  // lands where an earlier one was finished adds nothing. Best fit first (the most reliable
+  // pair first between equal fits), the best num_seeds go on.
+  std::vector<Candidate> candidates;
   for (const Seed& seed : MostReliablePairs(input, first, params, evaluator)) {
     AlignmentParams quick = params.alignment;
     quick.max_iterations = std::min(quick.max_iterations, params.seed_alignment_iterations);
     const AlignmentResult induced =
         InducedAlignment(input.scan[seed.scan], input.model[seed.model], quick);
-    const bool duplicate = std::any_of(induced_poses.begin(), induced_poses.end(), [&](const Pose2& p) {
-      return SameEstimate(p, induced.T_map_scan);
+    const bool duplicate = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) {
+      return SameEstimate(c.T_model_scan, induced.T_map_scan);
     });
     if (duplicate) continue;
-    induced_poses.push_back(induced.T_map_scan);
-    reliabilities.push_back(seed.reliability);
+    const Pose2 aligned = scorer.QuickAlign(induced.T_map_scan);
+    candidates.push_back({aligned, seed.reliability, scorer.InlierRatio(aligned)});
   }
-  std::vector<Candidate> candidates;
-  const Pose2 reference = input.hint_estimates.empty() ? Pose2() : input.hint_estimates.front();
-  for (const RankedCandidate& r : scorer.Rank(induced_poses, reference)) {
-    if (static_cast<int>(candidates.size()) >= params.num_seeds) break;
-    candidates.push_back({r.T_model_scan, reliabilities[r.index], r.fit});
-  }
+  std::stable_sort(candidates.begin(), candidates.end(),
+                   [](const Candidate& a, const Candidate& b) { return a.fit > b.fit; });
+  if (static_cast<int>(candidates.size()) > params.num_seeds) candidates.resize(params.num_seeds);
   for (const Pose2& hint : input.hint_estimates) candidates.push_back({hint});
   return candidates;
 }
