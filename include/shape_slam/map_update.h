@@ -35,8 +35,10 @@ struct MapUpdateParams {
   double merge_min_overlap_m = 0.30;
   double merge_min_overlap_fraction = 0.5;
   /// When the scan's pose is not confirmed by a match, only perceived polylines that lie mostly
-  /// farther than this from the map are added (new territory); nothing is merged (metres).
+  /// farther than this from the map are added (new territory); nothing is merged (metres) ...
   double untrusted_clearance_m = 0.5;
+  /// ... "mostly": more than this fraction of its samples.
+  double untrusted_near_fraction = 0.5;
   /// A perceived polyline that merges nowhere is still not added when more than
   /// explained_fraction of it lies within explained_distance_m (metres) of the map: the map
   /// already holds it (clutter seen from another side, fragments of a known wall).
@@ -51,6 +53,10 @@ struct MapUpdateParams {
   /// `drop_min_contradictions` times is removed (people, doors, other moving things).
   int drop_max_observations = 1;
   int drop_min_contradictions = 3;
+  /// Spacing of the samples of the checks above (new territory, contradiction), metres ...
+  double check_sample_spacing_m = 0.10;
+  /// ... and of the check that a merge stays near its inputs (merge_max_deviation_m), metres.
+  double merge_check_spacing_m = 0.05;
 
   void Validate() const;
 };

@@ -94,7 +94,17 @@ struct LoopClosureParams {
   double strong_inlier_ratio = 0.8;
   int confirm_within_keyframes = 10;
   double confirm_tolerance_m = 0.2;
+  double confirm_tolerance_per_m = 0.2;  ///< ... plus this fraction of the correction's length
   double confirm_tolerance_rad = 0.05;
+  /// Candidates are ordered by distance plus this many metres per radian of heading difference
+  /// ...
+  double candidate_turn_weight_m_per_rad = 2.0;
+  /// ... and spread along the old path: no two tried within this much driving of each other.
+  double candidate_spacing_m = 2.0;
+  /// A keyframe whose pose no match confirmed is tied to the previous one by an edge with these
+  /// standard deviations (a weak constraint), metres and radians.
+  double unconfirmed_sigma_m = 0.3;
+  double unconfirmed_sigma_rad = 0.1;
   /// A loop edge that disagrees with the graph by more than this triggers optimisation.
   double min_correction_m = 0.05;
   double min_correction_rad = 0.01;

@@ -209,12 +209,12 @@ std::vector<PolylineId> CorrespondingMapPolylines(const PolylineMap& map, const 
   return ids;
 }
 
-// Largest distance from points sampled along `a` (every 5 cm) to the nearer of `b` and `c`.
-double FarthestFrom(const Polyline& a, const Polyline& b, const Polyline& c) {
+// Largest distance from points sampled along `a` (every spacing_m) to the nearer of `b` and `c`.
+double FarthestFrom(const Polyline& a, const Polyline& b, const Polyline& c, double spacing_m) {
   double worst = 0.0;
   for (std::size_t i = 0; i + 1 < a.size(); ++i) {
     const Point2 d = a[i + 1] - a[i];
-    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / 0.05)));
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / spacing_m)));
     for (int k = 0; k <= n; ++k) {
       const Point2 p = a[i] + d * (static_cast<double>(k) / n);
       double d2 = ProjectOntoPolyline(p, b).squared_distance;
@@ -231,13 +231,14 @@ double FarthestFrom(const Polyline& a, const Polyline& b, const Polyline& c) {
 bool SoundMerge(const Polyline& merged, const Polyline& model, const Polyline& perceived,
                 const MapUpdateParams& params) {
   const double tolerance = 2.0 * params.merge_max_misfit_m;
-  return merged.size() >= 2 && FarthestFrom(merged, model, perceived) <= tolerance &&
-         FarthestFrom(model, merged, {}) <= tolerance;
+  const double spacing = params.merge_check_spacing_m;
+  return merged.size() >= 2 && FarthestFrom(merged, model, perceived, spacing) <= tolerance &&
+         FarthestFrom(model, merged, {}, spacing) <= tolerance;
 }
 
 // Whether more than `fraction` of a perceived polyline lies within `clearance_m` of the map.
 bool NearMap(const PolylineMap& map, const Polyline& perceived, double clearance_m,
-             double fraction) {
+             double fraction, double spacing_m) {
   Point2 min = perceived.front(), max = perceived.front();
   for (const Point2& p : perceived) min = min.cwiseMin(p), max = max.cwiseMax(p);
   const Point2 margin = Point2::Constant(clearance_m);
@@ -246,7 +247,7 @@ bool NearMap(const PolylineMap& map, const Polyline& perceived, double clearance
   int near = 0, total = 0;
   for (std::size_t i = 0; i + 1 < perceived.size(); ++i) {
     const Point2 d = perceived[i + 1] - perceived[i];
-    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / 0.1)));
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / spacing_m)));
     for (int k = 0; k < n; ++k) {
       const Point2 p = perceived[i] + d * ((k + 0.5) / n);
       ++total;
@@ -311,7 +312,7 @@ bool Contradicted(const Polyline& piece_sensor, const LaserScan& scan,
   int through = 0, considered = 0;
   for (std::size_t i = 0; i + 1 < piece_sensor.size(); ++i) {
     const Point2 d = piece_sensor[i + 1] - piece_sensor[i];
-    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / 0.1)));
+    const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / params.check_sample_spacing_m)));
     for (int k = 0; k < n; ++k) {
       const Point2 p = piece_sensor[i] + d * ((k + 0.5) / n);
       const auto beam = NearestBeam(order, scan, std::atan2(p.y(), p.x()), beam_step_rad);
@@ -366,6 +367,11 @@ void MapUpdateParams::Validate() const {
     }
   };
   positive(dce_threshold_m, "dce_threshold_m");
+  positive(check_sample_spacing_m, "check_sample_spacing_m");
+  positive(merge_check_spacing_m, "merge_check_spacing_m");
+  if (!(untrusted_near_fraction >= 0.0 && untrusted_near_fraction <= 1.0)) {
+    throw std::invalid_argument("MapUpdateParams::untrusted_near_fraction must be in [0, 1]");
+  }
   positive(max_deviation_m, "max_deviation_m");
   positive(merge_sample_spacing_m, "merge_sample_spacing_m");
   positive(max_support, "max_support");
@@ -441,7 +447,11 @@ MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceive
   std::vector<PolylineId> touched;
   for (const Polyline& perceived : perceived_map) {
     if (perceived.size() < 2 || PolylineLength(perceived) < params.min_new_length_m) continue;
-    if (!pose_trusted && NearMap(map, perceived, params.untrusted_clearance_m, 0.5)) continue;
+    if (!pose_trusted &&
+        NearMap(map, perceived, params.untrusted_clearance_m, params.untrusted_near_fraction,
+                params.check_sample_spacing_m)) {
+      continue;
+    }
     const std::vector<PolylineId> ids =
         pose_trusted ? CorrespondingMapPolylines(map, perceived, params) : std::vector<PolylineId>{};
     if (!ids.empty() && MergeIntoMap(map, perceived, ids, viewpoint, params, stats)) {
@@ -451,7 +461,8 @@ MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceive
     if (!ids.empty()) ++stats.unsound;
     // Already represented (clutter seen again from another side, a fragment of a known wall):
     // adding it would only duplicate the map.
-    if (NearMap(map, perceived, params.explained_distance_m, params.explained_fraction)) {
+    if (NearMap(map, perceived, params.explained_distance_m, params.explained_fraction,
+                params.check_sample_spacing_m)) {
       ++stats.explained;
       continue;
     }

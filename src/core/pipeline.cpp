@@ -48,6 +48,11 @@ Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosure
   return c;
 }
 
+Eigen::Matrix3d UnconfirmedCovariance(const LoopClosureParams& p) {
+  const double m2 = p.unconfirmed_sigma_m * p.unconfirmed_sigma_m;
+  return Eigen::Vector3d(m2, m2, p.unconfirmed_sigma_rad * p.unconfirmed_sigma_rad).asDiagonal();
+}
+
 // The visible shape a scan is matched against: around the scan's own field of view, all around
 // when there is no pose estimate (§4.3).
 VisibilityParams VisibilityFor(const LaserScan& scan, bool no_estimate, const ShapeSlamParams& p) {
@@ -132,6 +137,11 @@ void LoopClosureParams::Validate() const {
   }
   NonNegative(confirm_tolerance_m, "LoopClosureParams::confirm_tolerance_m");
   NonNegative(confirm_tolerance_rad, "LoopClosureParams::confirm_tolerance_rad");
+  NonNegative(confirm_tolerance_per_m, "LoopClosureParams::confirm_tolerance_per_m");
+  NonNegative(candidate_turn_weight_m_per_rad, "LoopClosureParams::candidate_turn_weight_m_per_rad");
+  NonNegative(candidate_spacing_m, "LoopClosureParams::candidate_spacing_m");
+  Positive(unconfirmed_sigma_m, "LoopClosureParams::unconfirmed_sigma_m");
+  Positive(unconfirmed_sigma_rad, "LoopClosureParams::unconfirmed_sigma_rad");
   Positive(max_correction_m, "LoopClosureParams::max_correction_m");
   NonNegative(max_correction_per_m, "LoopClosureParams::max_correction_per_m");
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0) ||
@@ -231,7 +241,7 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   edge.T_from_to = KeyframePose(previous).Inverse() * T_map_robot;
   // An unconfirmed step (odometry or nothing) is a weak constraint.
   edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
-                            : Eigen::Matrix3d(Eigen::Vector3d(0.09, 0.09, 0.01).asDiagonal());
+                            : UnconfirmedCovariance(params_.loop_closure);
   const std::vector<Point2> samples =
       internal::AlignmentSamples(fine, params_.matcher.alignment.sample_spacing_m);
   if (samples.empty() || prev.fine.empty()) return edge;
@@ -274,14 +284,16 @@ std::vector<int> ShapeSlam::LoopCandidates() const {
     const Pose2 P = KeyframePose(k);
     const double d = (P.Translation() - P_now.Translation()).norm();
     const double turn = std::abs(NormalizeAngle(P.theta - P_now.theta));
-    if (d <= p.search_radius_m && turn <= p.max_view_angle_rad) scored.emplace_back(d + 2.0 * turn, k);
+    if (d <= p.search_radius_m && turn <= p.max_view_angle_rad) {
+      scored.emplace_back(d + p.candidate_turn_weight_m_per_rad * turn, k);
+    }
   }
   std::sort(scored.begin(), scored.end());
   std::vector<int> candidates;
   for (const auto& [score, k] : scored) {
     // Neighbouring keyframes see nearly the same: spread the tries along the old path.
     const bool near_tried = std::any_of(candidates.begin(), candidates.end(), [&, k = k](int c) {
-      return std::abs(keyframes_[c].travel_m - keyframes_[k].travel_m) < 2.0;
+      return std::abs(keyframes_[c].travel_m - keyframes_[k].travel_m) < p.candidate_spacing_m;
     });
     if (!near_tried) candidates.push_back(k);
     if (static_cast<int>(candidates.size()) >= p.max_candidates) break;
@@ -355,7 +367,7 @@ bool ShapeSlam::SearchLoop() {
   const bool confirmed =
       pending_loop_ && current - pending_loop_->keyframe <= p.confirm_within_keyframes &&
       (pending_loop_->correction.Translation() - c.Translation()).norm() <=
-          p.confirm_tolerance_m + 0.2 * c.Translation().norm() &&
+          p.confirm_tolerance_m + p.confirm_tolerance_per_m * c.Translation().norm() &&
       std::abs(NormalizeAngle(pending_loop_->correction.theta - c.theta)) <= p.confirm_tolerance_rad;
   if (!confirmed) {
     pending_loop_ = loop;
