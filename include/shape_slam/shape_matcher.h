@@ -61,6 +61,10 @@ struct ShapeMatcherParams {
   int seed_alignment_iterations = 10;
   /// Spacing of the samples that score seeds and final fits, metres.
   double fit_sample_spacing_m = 0.2;
+  /// A seed whose induced alignment lies within these of a finished earlier seed is the same
+  /// seed (metres, radians).
+  double same_seed_m = 0.05;
+  double same_seed_rad = 0.02;
   /// Without an estimate, candidates are ranked by inlier ratio - rotation_prior_weight *
   /// (theta / pi)^2: between equally good fits (symmetric places) the smaller turn wins.
   double rotation_prior_weight = 0.1;

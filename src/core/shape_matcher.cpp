@@ -342,9 +342,9 @@ struct Candidate {
   double fit = 0.0;
 };
 
-bool SameEstimate(const Pose2& a, const Pose2& b) {
-  return (a.Translation() - b.Translation()).norm() < 0.05 &&
-         std::abs(NormalizeAngle(a.theta - b.theta)) < 0.02;
+bool SameEstimate(const Pose2& a, const Pose2& b, const ShapeMatcherParams& params) {
+  return (a.Translation() - b.Translation()).norm() < params.same_seed_m &&
+         std::abs(NormalizeAngle(a.theta - b.theta)) < params.same_seed_rad;
 }
 
 std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
@@ -362,7 +362,7 @@ std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,
     const AlignmentResult induced =
         InducedAlignment(input.scan[seed.scan], input.model[seed.model], quick);
     const bool duplicate = std::any_of(candidates.begin(), candidates.end(), [&](const Candidate& c) {
-      return SameEstimate(c.T_model_scan, induced.T_map_scan);
+      return SameEstimate(c.T_model_scan, induced.T_map_scan, params);
     });
     if (duplicate) continue;
     const Pose2 aligned = scorer.QuickAlign(induced.T_map_scan);
@@ -463,6 +463,8 @@ void ShapeMatcherParams::Validate() const {
   }
   positive(seed_capture_distance_m, "seed_capture_distance_m");
   positive(fit_sample_spacing_m, "fit_sample_spacing_m");
+  positive(same_seed_m, "same_seed_m");
+  positive(same_seed_rad, "same_seed_rad");
   if (seed_alignment_iterations < 1) {
     throw std::invalid_argument("ShapeMatcherParams::seed_alignment_iterations must be >= 1");
   }

@@ -73,6 +73,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"matcher", "seed_capture_distance_m", "association gate of those steps (m)", &p.matcher.seed_capture_distance_m},
       {"matcher", "seed_alignment_iterations", "ICP steps of a seed's induced alignment on its own pair", &p.matcher.seed_alignment_iterations},
       {"matcher", "fit_sample_spacing_m", "spacing of the samples that score seeds and final fits (m)", &p.matcher.fit_sample_spacing_m},
+      {"matcher", "same_seed_m", "seeds inducing an alignment within this (m) ...", &p.matcher.same_seed_m},
+      {"matcher", "same_seed_rad", "... and this (rad) of a finished earlier seed are the same", &p.matcher.same_seed_rad},
       {"matcher", "first_pass_group_size", "paper §4.3: largest group in the first pass", &p.matcher.first_pass_group_size},
       {"matcher", "inlier_distance_m", "a scan sample within this of the map counts as an inlier (m)", &p.matcher.inlier_distance_m},
       {"matcher", "deviation_sample_spacing_m", "spacing of the samples measuring D (m)", &p.matcher.deviation_sample_spacing_m},
