@@ -9,9 +9,9 @@
 //   lost       tracking failed (several scans without a trusted match, or a sudden drop of
 //              the fit: the kidnapped robot); the global search runs again until it recovers
 //
-// The global search is the window search (window_search.h) over the whole map, all turns, its
-// poses verified by the candidate selection and refinement of the per-scan localization.
-// Hypotheses are ranked by an evidence score, a decaying sum of their fits over the scans.
+// The global search is the window search (window_search.h) from a grid of centres covering the
+// whole map, all turns, its poses verified by the candidate selection and refinement of the per-scan localization.
+// Hypotheses are ranked by an evidence score, a decaying sum of the samples they explain.
 // Deterministic: the same map, scans and parameters give bit-identical results.
 #pragma once
 
@@ -35,22 +35,32 @@ struct LocalizerParams {
   double min_inlier_ratio = 0.5;
   /// A hypothesis of the global search is accepted as the pose once its fit reaches this.
   double min_global_fit = 0.6;
-  /// Window search over the whole map: at most this many poses per scan ...
+  /// Global search: the window search (all turns) from centres on a grid covering the map,
+  /// every 2 * global_tile_half_m; one window over the whole map would need a field far
+  /// coarser than the map's detail (its padding grows with the window). Metres.
+  double global_tile_half_m = 3.0;
+  /// Cell size and likelihood width of the global search's field, metres (coarse: the
+  /// verification refines the poses).
+  double global_resolution_m = 0.2;
+  double global_hit_sigma_m = 0.2;
+  /// The global search's angular step moves samples at this range by one cell (metres).
+  double global_max_step_range_m = 8.0;
+  /// Search nodes scored per window centre.
+  int global_node_evaluations = 5000;
+  /// At most this many poses of the global search (best fit first, distinct) are verified.
   int global_hypotheses = 8;
-  /// ... scoring at least this fraction of the best one's ...
-  double global_min_relative_score = 0.5;
-  /// ... within this bound on the work (search nodes scored).
-  int global_max_node_evaluations = 400000;
   /// Hypotheses kept between scans while ambiguous.
   int max_hypotheses = 4;
   /// Hypotheses closer than these are one (metres, radians).
   double distinct_m = 0.5;
   double distinct_rad = 0.3;
-  /// Evidence = evidence_decay * evidence + fit per scan (a hypothesis tracked for n scans
-  /// scores up to (1 - decay^n) / (1 - decay)).
+  /// Evidence of a hypothesis, per scan: evidence_decay * evidence + the number of scan samples
+  /// it explains (samples every matcher.alignment.sample_spacing_m). Counting samples, not
+  /// fractions, lets a few samples on a distinguishing detail (a pillar, a door) decide between
+  /// places that look alike otherwise.
   double evidence_decay = 0.7;
-  /// Ambiguous while another hypothesis has at least this fraction of the best one's evidence.
-  double ambiguous_ratio = 0.85;
+  /// Ambiguous while another hypothesis's evidence is within this many samples of the best's.
+  double ambiguous_margin_samples = 8.0;
   /// Lost after this many consecutive scans without a trusted match while tracking.
   int lost_after_scans = 3;
   /// Lost when the fit stays below fit_drop_ratio times its running mean (an exponential mean
@@ -108,6 +118,7 @@ class Localizer {
   struct Verified {
     Pose2 T_map_robot;
     double fit = 0.0;
+    double explained = 0.0;  // samples explained: fit times the number of samples
     bool trusted = false;
   };
   Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
@@ -128,7 +139,7 @@ class Localizer {
   PolylineMap map_;
   std::vector<Polyline> walls_;  // every map polyline, map frame
   WindowSearch global_search_;
-  Pose2 map_centre_;
+  std::vector<Pose2> tile_centres_;  // window centres of the global search, map frame
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   LocalizerStatus status_ = LocalizerStatus::kSearching;
   bool was_localized_ = false;

@@ -49,25 +49,37 @@ std::vector<Polyline> MapWalls(const PolylineMap& map) {
   return walls;
 }
 
-// The centre of the map's bounding box, and half its larger side (metres).
-std::pair<Pose2, double> MapExtent(const std::vector<Polyline>& walls) {
+// Window centres on a grid covering the map's bounding box, 2 * tile_half_m apart.
+std::vector<Pose2> TileCentres(const std::vector<Polyline>& walls, double tile_half_m) {
   Point2 lo = Point2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
   for (const Polyline& w : walls) {
     for (const Point2& p : w) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
   }
-  const Point2 centre = 0.5 * (lo + hi);
-  return {Pose2(centre.x(), centre.y(), 0.0), 0.5 * (hi - lo).maxCoeff()};
+  const Point2 size = hi - lo;
+  const int nx = std::max(1, static_cast<int>(std::ceil(size.x() / (2.0 * tile_half_m))));
+  const int ny = std::max(1, static_cast<int>(std::ceil(size.y() / (2.0 * tile_half_m))));
+  std::vector<Pose2> centres;
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      centres.emplace_back(lo.x() + (i + 0.5) * size.x() / nx, lo.y() + (j + 0.5) * size.y() / ny,
+                           0.0);
+    }
+  }
+  return centres;
 }
 
-// The window search over the whole map: every position of the map's box, every turn, no prior.
-WindowSearchParams GlobalSearchParams(const LocalizerParams& params, double half_extent_m) {
+// The global search's window: one tile (with a cell of overlap), every turn, no prior.
+WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
   WindowSearchParams window = params.stages.window_search;
-  window.half_window_m = half_extent_m + window.resolution_m;
+  window.resolution_m = params.global_resolution_m;
+  window.hit_sigma_m = params.global_hit_sigma_m;
+  window.max_step_range_m = params.global_max_step_range_m;
+  window.half_window_m = params.global_tile_half_m + params.global_resolution_m;
   window.half_window_rad = M_PI;
   window.prior_weight = 0.0;
   window.max_hypotheses = params.global_hypotheses;
-  window.min_relative_score = params.global_min_relative_score;
-  window.max_node_evaluations = params.global_max_node_evaluations;
+  window.min_relative_score = 0.0;
+  window.max_node_evaluations = params.global_node_evaluations;
   window.distinct_m = params.distinct_m;
   window.distinct_rad = params.distinct_rad;
   return window;
@@ -111,14 +123,17 @@ void LocalizerParams::Validate() const {
   stages.Validate();
   InRange(min_inlier_ratio, 0.0, 1.0, "LocalizerParams::min_inlier_ratio");
   InRange(min_global_fit, 0.0, 1.0, "LocalizerParams::min_global_fit");
+  InRange(global_tile_half_m, 0.1, 1e3, "LocalizerParams::global_tile_half_m");
+  InRange(global_resolution_m, 0.01, 10.0, "LocalizerParams::global_resolution_m");
+  InRange(global_hit_sigma_m, 0.01, 10.0, "LocalizerParams::global_hit_sigma_m");
+  InRange(global_max_step_range_m, 1.0, 1e3, "LocalizerParams::global_max_step_range_m");
+  AtLeastOne(global_node_evaluations, "LocalizerParams::global_node_evaluations");
   AtLeastOne(global_hypotheses, "LocalizerParams::global_hypotheses");
-  InRange(global_min_relative_score, 0.0, 1.0, "LocalizerParams::global_min_relative_score");
-  AtLeastOne(global_max_node_evaluations, "LocalizerParams::global_max_node_evaluations");
   AtLeastOne(max_hypotheses, "LocalizerParams::max_hypotheses");
   InRange(distinct_m, 0.0, 1e6, "LocalizerParams::distinct_m");
   InRange(distinct_rad, 0.0, M_PI, "LocalizerParams::distinct_rad");
   InRange(evidence_decay, 0.0, 0.999, "LocalizerParams::evidence_decay");
-  InRange(ambiguous_ratio, 0.0, 1.0, "LocalizerParams::ambiguous_ratio");
+  InRange(ambiguous_margin_samples, 0.0, 1e9, "LocalizerParams::ambiguous_margin_samples");
   AtLeastOne(lost_after_scans, "LocalizerParams::lost_after_scans");
   InRange(fit_drop_ratio, 0.0, 1.0, "LocalizerParams::fit_drop_ratio");
   AtLeastOne(fit_drop_scans, "LocalizerParams::fit_drop_scans");
@@ -139,8 +154,8 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
     : params_(Validated(params)),
       map_(std::move(map)),
       walls_(MapWalls(map_)),
-      global_search_(walls_, GlobalSearchParams(params_, MapExtent(walls_).second)),
-      map_centre_(MapExtent(walls_).first) {}
+      global_search_(walls_, GlobalSearchParams(params_)),
+      tile_centres_(TileCentres(walls_, params_.global_tile_half_m)) {}
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   hypotheses_ = {Hypothesis{T_map_robot, 1.0, 0.0, {}, 0}};
@@ -188,20 +203,36 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   verified.T_map_robot = T_map_sensor_pred * loc.correction * scan.T_robot_sensor.Inverse();
   verified.fit = loc.trusted ? loc.inlier_ratio : 0.0;
   verified.trusted = loc.trusted && loc.inlier_ratio >= params_.min_inlier_ratio;
+  verified.explained =
+      verified.fit *
+      static_cast<double>(
+          internal::AlignmentSamples(shapes.fine, p.matcher.alignment.sample_spacing_m).size());
   return verified;
 }
 
-// The window search over the whole map (all positions, all turns): robot poses, best first.
+// The window search from every tile centre (all turns): the best distinct robot poses of the
+// whole map, best fit first (ties: the earlier tile).
 std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
                                                const LaserScan& scan) const {
   const ShapeSlamParams& p = params_.stages;
   const double spacing = p.matcher.alignment.sample_spacing_m;
   const std::vector<Point2> samples = internal::Thinned(
       internal::AlignmentSamples(shapes.fine, spacing), spacing, p.window_search_spacing_m);
-  std::vector<Pose2> candidates;
-  for (const WindowHypothesis& h : global_search_.Search(samples, map_centre_)) {
-    candidates.push_back(h.T_model_scan * scan.T_robot_sensor.Inverse());
+  std::vector<WindowHypothesis> all;
+  for (const Pose2& centre : tile_centres_) {
+    for (const WindowHypothesis& h : global_search_.Search(samples, centre)) all.push_back(h);
   }
+  std::stable_sort(all.begin(), all.end(), [](const WindowHypothesis& a, const WindowHypothesis& b) {
+    return a.fit > b.fit;
+  });
+  std::vector<Pose2> candidates;  // sensor poses
+  for (const WindowHypothesis& h : all) {
+    if (static_cast<int>(candidates.size()) >= params_.global_hypotheses) break;
+    const bool known = std::any_of(candidates.begin(), candidates.end(),
+                                   [&](const Pose2& c) { return Near(c, h.T_model_scan, params_); });
+    if (!known) candidates.push_back(h.T_model_scan);
+  }
+  for (Pose2& c : candidates) c = c * scan.T_robot_sensor.Inverse();
   return candidates;
 }
 
@@ -222,7 +253,7 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
     const Verified v = Track(shapes, scan, h, odometry_delta, h.misses);
     Motion(h, v.T_map_robot);
     h.fit = v.fit;
-    h.evidence = params_.evidence_decay * h.evidence + v.fit;
+    h.evidence = params_.evidence_decay * h.evidence + v.explained;
     h.misses = v.trusted ? 0 : h.misses + 1;
     if (h.misses < params_.lost_after_scans) kept.push_back(std::move(h));
   }
@@ -239,7 +270,7 @@ void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& s
     const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
       return Near(h.T_map_robot, v.T_map_robot, params_);
     });
-    if (!known) hypotheses_.push_back(Hypothesis{v.T_map_robot, v.fit, v.fit, {}, 0});
+    if (!known) hypotheses_.push_back(Hypothesis{v.T_map_robot, v.explained, v.fit, {}, 0});
   }
 }
 
@@ -274,7 +305,7 @@ LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& sca
   report.T_map_robot = best.T_map_robot;
   report.inlier_ratio = best.fit;
   const bool rival = hypotheses_.size() > 1 &&
-                     hypotheses_[1].evidence >= params_.ambiguous_ratio * best.evidence;
+                     hypotheses_[1].evidence >= best.evidence - params_.ambiguous_margin_samples;
   if (rival) report.status = LocalizerStatus::kAmbiguous;
   if (rival || best.misses > 0 || best.fit < params_.min_global_fit) return report;
   hypotheses_.resize(1);
