@@ -46,7 +46,7 @@ struct LocalizerParams {
   /// The global search's angular step moves samples at this range by one cell (metres).
   double global_max_step_range_m = 8.0;
   /// Search nodes scored per window centre.
-  int global_node_evaluations = 5000;
+  int global_node_evaluations = 30000;
   /// At most this many poses of the global search (best fit first, distinct) are verified.
   int global_hypotheses = 8;
   /// Hypotheses kept between scans while ambiguous.
