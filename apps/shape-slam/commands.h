@@ -15,5 +15,6 @@ int RunRun(const Args& args);
 int RunEval(const Args& args);
 int RunMatch(const Args& args);
 int RunConvert(const Args& args);
+int RunLocalize(const Args& args);
 
 }  // namespace shape_slam::app

@@ -19,6 +19,8 @@ struct Command {
 
 const Command kCommands[] = {
     {"run", shape_slam::app::RunRun, "build a polyline map from a log (the main job)"},
+    {"localize", shape_slam::app::RunLocalize,
+     "localization of a log in a saved map.polylines (the map is unchanged)"},
     {"extract", shape_slam::app::RunExtract,
      "polylines of one scan before and after Discrete Curve Evolution"},
     {"match", shape_slam::app::RunMatch,

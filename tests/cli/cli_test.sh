@@ -28,7 +28,7 @@ expect() {
 
 # Help everywhere.
 expect 0 "Commands:" -- "$BIN" --help
-for cmd in run extract match eval convert; do
+for cmd in run localize extract match eval convert; do
   expect 0 "Usage: shape-slam $cmd" -- "$BIN" "$cmd" --help
 done
 expect 2 "unknown command" -- "$BIN" frobnicate
@@ -132,6 +132,32 @@ expect 0 "odometry never changes" -- "$BIN" run "$WORK/zero-odom.log" --out "$WO
 grep -q '"status": *"constant"' "$WORK/zero/stats.json" || fail "stats.json: odometry not 'constant'"
 expect 0 "" -- "$BIN" run "$LOG" --out "$WORK/moving" --quiet
 grep -q '"status": *"used"' "$WORK/moving/stats.json" || fail "stats.json: odometry not 'used'"
+# localize: in the map that run made of the same log, without and with --initial (the run's
+# first pose); the map file is left unchanged; bad maps name the file and line (exit 1).
+map_sum=$(cksum <"$WORK/moving/map.polylines")
+expect 0 "localized [0-9]+ of 3 scans" -- "$BIN" localize "$WORK/moving/map.polylines" "$LOG" \
+  --out "$WORK/loc"
+[ "$(cksum <"$WORK/moving/map.polylines")" = "$map_sum" ] || fail "localize changed the map file"
+python3 - "$WORK/loc/stats.json" "$WORK/loc/trajectory.tum" <<'PY' || fail "localize stats.json not sane"
+import json, sys
+d = json.load(open(sys.argv[1]))
+assert d["scans"] == 3 and d["localized_scans"] >= 1 and 0 <= d["first_localized_scan"] <= 1, d
+assert d["lost_events"] == 0 and d["per_scan_ms"]["median"] > 0, d
+poses = [l for l in open(sys.argv[2]) if l.strip() and not l.startswith("#")]
+assert len(poses) == d["localized_scans"], (len(poses), d)
+PY
+read -r _ x y _ _ _ qz qw < <(grep -v '^#' "$WORK/moving/trajectory.tum" | head -n 1)
+theta=$(python3 -c "import math; print(2 * math.atan2($qz, $qw))")
+expect 0 "localized 3 of 3 scans" -- "$BIN" localize "$WORK/moving/map.polylines" "$LOG" \
+  --out "$WORK/loc-init" --initial "$x" "$y" "$theta"
+grep -q '"first_localized_scan": *0' "$WORK/loc-init/stats.json" || fail "--initial: not localized at scan 0"
+expect 2 "--initial" -- "$BIN" localize "$WORK/moving/map.polylines" "$LOG" --initial 1 nan 0
+expect 2 "missing argument LOG" -- "$BIN" localize "$WORK/moving/map.polylines"
+expect 1 "garbage.log:[0-9]+:" -- "$BIN" localize "$WORK/garbage.log" "$LOG" --out "$WORK/o"
+head -n 6 "$WORK/moving/map.polylines" >"$WORK/truncated.polylines"
+expect 1 "truncated.polylines:[0-9]+:.*(end of file|expected)" -- \
+  "$BIN" localize "$WORK/truncated.polylines" "$LOG" --out "$WORK/o"
+expect 1 "missing.polylines" -- "$BIN" localize "$WORK/missing.polylines" "$LOG" --out "$WORK/o"
 # Fewer than 90 % of the scans matched: a warning with the count, and the flag in stats.json.
 printf '[pipeline]\nmin_inlier_ratio = 1.0\n' >"$WORK/never-trusted.ini"
 expect 0 "warning: only [0-9]+ of [0-9]+ scans" -- \

@@ -1,0 +1,188 @@
+// shape-slam localize: localization of a log in a saved map.polylines (the map is unchanged).
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <iostream>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "app_common.h"
+#include "cli.h"
+#include "commands.h"
+#include "progress.h"
+#include "shape_slam/localizer.h"
+#include "shape_slam_io/atomic_file.h"
+#include "shape_slam_io/json_writer.h"
+#include "shape_slam_io/map_file.h"
+#include "shape_slam_io/params_ini.h"
+#include "shape_slam_io/trajectory_io.h"
+
+namespace shape_slam::app {
+namespace {
+
+ArgParser MakeParser() {
+  ArgParser parser("localize",
+                   "Localizes the robot of a laser log in a saved polyline map, which is left\n"
+                   "unchanged. Without --initial the robot is found by a global search over the\n"
+                   "whole map; while look-alike places explain the scans equally well it waits\n"
+                   "for more scans. It then tracks the pose against the visible map (paper\n"
+                   "§3-§5.1), notices when it is lost (or carried away) and searches again.");
+  parser.Positional("MAP", "map.polylines written by 'shape-slam run'")
+      .Positional("LOG", "CARMEN log (.log/.clf[.gz]) or MRPT rawlog")
+      .Option("--initial", {"X", "Y", "THETA"}, "the robot's first pose in the map (m, m, rad)")
+      .Option("--config", {"FILE.ini"}, "parameters (see config/default.ini for every key)")
+      .Option("--out", {"DIR"}, "output directory", "./shape-slam-localize")
+      .Flag("--no-odometry", "ignore the log's odometry: match by shape alone (paper §4.3)")
+      .Option("--max-scans", {"N"}, "process only the first N laser scans")
+      .Flag("--quiet", "no progress bar and no summary")
+      .Flag("--strict", "fail on the first malformed log record instead of skipping it")
+      .Epilog(
+          "Outputs (written atomically into DIR, only after a successful run):\n"
+          "  trajectory.tum   one line per localized scan: timestamp x y z qx qy qz qw\n"
+          "  stats.json       scans, localized fraction, first localized scan, lost and\n"
+          "                   recovered events, per-scan times, status counts\n\n"
+          "Example:\n"
+          "  shape-slam run intel.log.gz --out intel-out\n"
+          "  shape-slam localize intel-out/map.polylines intel.log.gz --out intel-loc");
+  return parser;
+}
+
+struct LocalizeOutput {
+  std::vector<StampedPose> trajectory;  // localized scans only
+  std::vector<double> scan_ms;
+  std::size_t scans = 0, localized = 0, matched = 0;
+  long long first_localized = -1;
+  int lost_events = 0, recovered_events = 0;
+  std::size_t status_counts[4] = {0, 0, 0, 0};
+  double processing_s = 0.0;
+};
+
+LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& scans, bool quiet) {
+  LocalizeOutput out;
+  ProgressBar progress(scans.size(), "localizing", !quiet);
+  const auto start = std::chrono::steady_clock::now();
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const LocalizerReport report = localizer.Process(scans[i]);
+    const auto t1 = std::chrono::steady_clock::now();
+    out.scan_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    ++out.status_counts[static_cast<int>(report.status)];
+    if (report.localized) {
+      out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
+      ++out.localized;
+      if (out.first_localized < 0) out.first_localized = static_cast<long long>(i);
+    }
+    out.matched += report.matched ? 1 : 0;
+    out.lost_events += report.lost_event ? 1 : 0;
+    out.recovered_events += report.recovered_event ? 1 : 0;
+    progress.Update(i + 1);
+  }
+  progress.Finish();
+  out.scans = scans.size();
+  out.processing_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return out;
+}
+
+double Percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double position = q * (values.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(position));
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (position - lo) * (values[hi] - values[lo]);
+}
+
+double LocalizedFraction(const LocalizeOutput& out) {
+  return out.scans == 0 ? 0.0 : static_cast<double>(out.localized) / out.scans;
+}
+
+std::string StatsJson(const LocalizeOutput& out, const std::string& map_path,
+                      const io::LogReader& reader, bool initial, double wall_s) {
+  io::JsonWriter json;
+  json.BeginObject().Key("scans").Value(out.scans);
+  json.Key("map").Value(map_path).Key("initial_pose_given").Value(initial);
+  json.Key("wall_s").Value(wall_s).Key("processing_s").Value(out.processing_s);
+  json.Key("per_scan_ms").BeginObject();
+  json.Key("median").Value(Percentile(out.scan_ms, 0.5)).Key("p95").Value(Percentile(out.scan_ms, 0.95));
+  json.Key("max").Value(out.scan_ms.empty() ? 0.0 : *std::max_element(out.scan_ms.begin(), out.scan_ms.end()));
+  json.EndObject();
+  json.Key("localized_scans").Value(out.localized);
+  json.Key("localized_fraction").Value(LocalizedFraction(out));
+  json.Key("matched_scans").Value(out.matched);
+  json.Key("first_localized_scan").Value(out.first_localized);
+  json.Key("lost_events").Value(out.lost_events).Key("recovered_events").Value(out.recovered_events);
+  json.Key("status_counts").BeginObject();
+  for (int s = 0; s < 4; ++s) {
+    json.Key(ToString(static_cast<LocalizerStatus>(s))).Value(out.status_counts[s]);
+  }
+  json.EndObject();
+  json.Key("log").BeginObject().Key("path").Value(reader.Path()).Key("format").Value(reader.Format());
+  json.Key("skipped_records").Value(reader.Stats().skipped_records).EndObject();
+  json.EndObject();
+  return json.str() + "\n";
+}
+
+std::vector<LaserScan> ReadScans(io::LogReader& reader, long long max_scans) {
+  std::vector<LaserScan> scans;
+  while (std::optional<LaserScan> scan = reader.Next()) {
+    if (max_scans >= 0 && static_cast<long long>(scans.size()) >= max_scans) break;
+    scans.push_back(std::move(*scan));
+  }
+  return scans;
+}
+
+}  // namespace
+
+int RunLocalize(const Args& args) {
+  ArgParser parser = MakeParser();
+  if (!parser.Parse(args)) {
+    std::cout << parser.Help();
+    return 0;
+  }
+  const auto wall_start = std::chrono::steady_clock::now();
+  LocalizerParams params;
+  params.stages = LoadParamsForApp(parser.GetOptional("--config"));
+  if (parser.Has("--no-odometry")) params.stages.use_odometry = false;
+  const std::string map_path = parser.Get("MAP"), log = parser.Get("LOG");
+  const std::string out_dir = parser.GetOptional("--out").value_or("shape-slam-localize");
+  const bool quiet = parser.Has("--quiet");
+  const long long max_scans = parser.Has("--max-scans") ? parser.GetIndex("--max-scans") : -1;
+  std::optional<Pose2> initial;
+  if (parser.Has("--initial")) {
+    const std::vector<double> v = parser.GetDoubles("--initial");
+    initial = Pose2(v[0], v[1], v[2]);
+  }
+  io::EnsureDirectory(out_dir);  // fail early on an unusable output path
+  PolylineMap map = io::LoadMapFile(map_path);
+  if (map.Empty()) throw std::runtime_error(map_path + ": the map has no polylines");
+
+  const std::unique_ptr<io::LogReader> reader = OpenLogForApp(log, parser.Has("--strict"));
+  const std::vector<LaserScan> scans = ReadScans(*reader, max_scans);
+  ReportLogIssues(*reader);
+  if (scans.empty()) throw std::runtime_error(log + ": no laser scans to localize");
+
+  Localizer localizer(std::move(map), params);
+  if (initial) localizer.SetInitialPose(*initial);
+  SetFatalContext("localizing the log " + log.substr(0, 400));
+  const LocalizeOutput out = RunLocalizer(localizer, scans, quiet);
+  const double wall_s =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
+  io::WriteFileAtomically((std::filesystem::path(out_dir) / "trajectory.tum").string(),
+                          io::FormatTum(out.trajectory));
+  io::WriteFileAtomically((std::filesystem::path(out_dir) / "stats.json").string(),
+                          StatsJson(out, map_path, *reader, initial.has_value(), wall_s));
+  if (out.localized == 0) std::cerr << "warning: the robot was never localized in the map\n";
+  if (!quiet) {
+    std::cout << std::fixed << std::setprecision(2) << "localized " << out.localized << " of "
+              << out.scans << " scans (" << 100.0 * LocalizedFraction(out) << " %), first at scan "
+              << out.first_localized << ", lost " << out.lost_events << "x, recovered "
+              << out.recovered_events << "x, median " << Percentile(out.scan_ms, 0.5)
+              << " ms/scan\noutputs in " << out_dir << "/ (trajectory.tum, stats.json)\n";
+  }
+  return 0;
+}
+
+}  // namespace shape_slam::app

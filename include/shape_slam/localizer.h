@@ -1,0 +1,154 @@
+// Localization in a finished polyline map (`shape-slam localize`): the map is never changed.
+//
+// Per scan the localizer is in one of four states:
+//   searching  no pose yet: a global search over the whole map proposes hypotheses
+//   ambiguous  two or more distinct hypotheses explain the scans about equally well: each is
+//              tracked (propagated by the scan-to-scan motion) until one wins
+//   tracking   one pose, tracked like the mapper's per-scan localization (§4.2-§5.1) against
+//              the visible shape of the map from the prediction (§3)
+//   lost       tracking failed (several scans without a trusted match, or a sudden drop of
+//              the fit: the kidnapped robot); the global search runs again until it recovers
+//
+// The global search is the window search (window_search.h) from a grid of centres covering the
+// whole map, all turns, its poses verified by the candidate selection and refinement of the per-scan localization.
+// Hypotheses are ranked by an evidence score, a decaying sum of the samples they explain.
+// Deterministic: the same map, scans and parameters give bit-identical results.
+#pragma once
+
+#include <optional>
+#include <vector>
+
+#include "shape_slam/pipeline.h"
+#include "shape_slam/polyline_map.h"
+#include "shape_slam/types.h"
+#include "shape_slam/window_search.h"
+
+namespace shape_slam {
+
+struct LocalizerParams {
+  /// The stages of the per-scan localization (shapes, visibility, matcher, selection, window
+  /// search, refinement, odometry noise, gates), as in the mapper. Its map update, keyframe and
+  /// loop-closure settings are unused.
+  ShapeSlamParams stages;
+  /// A scan is matched when its refined pose explains at least this fraction of it (the map is
+  /// finished, so a good match explains more than the mapper's min_inlier_ratio asks).
+  double min_inlier_ratio = 0.5;
+  /// A hypothesis of the global search is accepted as the pose once its fit reaches this.
+  double min_global_fit = 0.6;
+  /// Global search: the window search (all turns) from centres on a grid covering the map,
+  /// every 2 * global_tile_half_m; one window over the whole map would need a field far
+  /// coarser than the map's detail (its padding grows with the window). Metres.
+  double global_tile_half_m = 3.0;
+  /// Cell size and likelihood width of the global search's field, metres (coarse: the
+  /// verification refines the poses).
+  double global_resolution_m = 0.2;
+  double global_hit_sigma_m = 0.2;
+  /// The global search's angular step moves samples at this range by one cell (metres).
+  double global_max_step_range_m = 8.0;
+  /// Search nodes scored per window centre.
+  int global_node_evaluations = 30000;
+  /// At most this many poses of the global search (best fit first, distinct) are verified.
+  int global_hypotheses = 8;
+  /// Hypotheses kept between scans while ambiguous.
+  int max_hypotheses = 4;
+  /// Hypotheses closer than these are one (metres, radians).
+  double distinct_m = 0.5;
+  double distinct_rad = 0.3;
+  /// Evidence of a hypothesis, per scan: evidence_decay * evidence + the number of scan samples
+  /// it explains (samples every matcher.alignment.sample_spacing_m). Counting samples, not
+  /// fractions, lets a few samples on a distinguishing detail (a pillar, a door) decide between
+  /// places that look alike otherwise.
+  double evidence_decay = 0.7;
+  /// Ambiguous while another hypothesis's evidence is within this many samples of the best's.
+  double ambiguous_margin_samples = 8.0;
+  /// Lost after this many consecutive scans without a trusted match while tracking.
+  int lost_after_scans = 3;
+  /// Lost when the fit stays below fit_drop_ratio times its running mean (an exponential mean
+  /// with weight fit_mean_weight per scan) for fit_drop_scans consecutive scans: the kidnapped
+  /// robot still finds some match, but one far worse than before.
+  double fit_drop_ratio = 0.6;
+  int fit_drop_scans = 2;
+  double fit_mean_weight = 0.2;
+
+  /// Throws std::invalid_argument naming the offending field.
+  void Validate() const;
+};
+
+enum class LocalizerStatus { kSearching, kAmbiguous, kTracking, kLost };
+
+/// A short name: "searching", "ambiguous", "tracking", "lost".
+const char* ToString(LocalizerStatus status);
+
+/// What the localizer made of one scan.
+struct LocalizerReport {
+  double timestamp_s = 0.0;
+  LocalizerStatus status = LocalizerStatus::kSearching;
+  bool localized = false;      ///< status is tracking: T_map_robot is the pose
+  bool matched = false;        ///< this scan found a trusted match (else the pose is predicted)
+  Pose2 T_map_robot;           ///< the pose (tracking) or the best hypothesis, if any
+  double inlier_ratio = 0.0;   ///< fraction of the scan explained at T_map_robot
+  int hypotheses = 0;          ///< hypotheses kept after this scan
+  bool lost_event = false;     ///< tracking was lost at this scan
+  bool recovered_event = false;  ///< the pose was found again after a loss at this scan
+};
+
+class Localizer {
+ public:
+  /// Copies the map (it is never changed). Throws std::invalid_argument on invalid params or an
+  /// empty map.
+  explicit Localizer(PolylineMap map, const LocalizerParams& params = {});
+
+  /// Starts tracking from a known robot pose, skipping the global search.
+  void SetInitialPose(const Pose2& T_map_robot);
+
+  /// Localizes the next scan. Throws std::invalid_argument for a malformed scan.
+  LocalizerReport Process(const LaserScan& scan);
+
+  const PolylineMap& Map() const { return map_; }
+  const LocalizerParams& Params() const { return params_; }
+
+ private:
+  struct Hypothesis {
+    Pose2 T_map_robot;
+    double evidence = 0.0;
+    double fit = 0.0;
+    std::vector<Pose2> recent_motions;  // T_prev_cur, for the constant-velocity prediction
+    int misses = 0;                     // consecutive scans without a trusted match
+  };
+  struct Verified {
+    Pose2 T_map_robot;
+    double fit = 0.0;
+    double explained = 0.0;  // samples explained: fit times the number of samples
+    bool trusted = false;
+  };
+  Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
+                 const std::optional<Pose2>& odometry_delta, int lost_scans) const;
+  std::vector<Pose2> GlobalCandidates(const ScanShapes& shapes, const LaserScan& scan) const;
+  void PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
+                           const std::optional<Pose2>& odometry_delta);
+  void AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan);
+  void PruneHypotheses();
+  LocalizerReport Search(const ScanShapes& shapes, const LaserScan& scan,
+                         const std::optional<Pose2>& odometry_delta);
+  LocalizerReport TrackPose(const ScanShapes& shapes, const LaserScan& scan,
+                            const std::optional<Pose2>& odometry_delta);
+  void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot) const;
+  std::optional<Pose2> OdometryDelta(const LaserScan& scan);
+
+  LocalizerParams params_;
+  PolylineMap map_;
+  std::vector<Polyline> walls_;  // every map polyline, map frame
+  WindowSearch global_search_;
+  std::vector<Pose2> tile_centres_;  // window centres of the global search, map frame
+  std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
+  LocalizerStatus status_ = LocalizerStatus::kSearching;
+  bool was_localized_ = false;
+  int lost_scans_ = 0;   // tracking: consecutive scans without a trusted match
+  int drop_scans_ = 0;   // tracking: consecutive scans with a dropped fit
+  double fit_mean_ = 0.0;
+  std::optional<Pose2> last_T_odom_robot_;
+  std::optional<Pose2> first_T_odom_robot_;
+  bool odometry_moved_ = false;
+};
+
+}  // namespace shape_slam

@@ -1,0 +1,368 @@
+#include "shape_slam/localizer.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "shape_slam/internal/localization.h"
+#include "shape_slam/polyline_extraction.h"
+#include "shape_slam/scan_shapes.h"
+#include "shape_slam/visibility.h"
+
+namespace shape_slam {
+namespace {
+
+void InRange(double value, double lo, double hi, const std::string& name) {
+  if (!(value >= lo && value <= hi)) {
+    throw std::invalid_argument(name + " must be in [" + std::to_string(lo) + ", " +
+                                std::to_string(hi) + "]");
+  }
+}
+
+void AtLeastOne(int value, const std::string& name) {
+  if (value < 1) throw std::invalid_argument(name + " must be >= 1");
+}
+
+const LocalizerParams& Validated(const LocalizerParams& params) {
+  params.Validate();
+  return params;
+}
+
+void ValidateScan(const LaserScan& scan) {
+  if (scan.ranges_m.size() != scan.angles_rad.size()) {
+    throw std::invalid_argument("scan at t=" + std::to_string(scan.timestamp_s) +
+                                ": ranges and angles differ in number");
+  }
+  if (!std::isfinite(scan.timestamp_s)) throw std::invalid_argument("scan timestamp is not finite");
+  for (const double a : scan.angles_rad) {
+    if (!std::isfinite(a)) throw std::invalid_argument("scan has a non-finite beam angle");
+  }
+}
+
+std::vector<Polyline> MapWalls(const PolylineMap& map) {
+  if (map.Empty()) throw std::invalid_argument("Localizer: the map is empty");
+  std::vector<Polyline> walls;
+  for (const PolylineId id : map.Ids()) walls.push_back(map.Get(id).points);
+  return walls;
+}
+
+// Window centres on a grid covering the map's bounding box, 2 * tile_half_m apart.
+std::vector<Pose2> TileCentres(const std::vector<Polyline>& walls, double tile_half_m) {
+  Point2 lo = Point2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
+  for (const Polyline& w : walls) {
+    for (const Point2& p : w) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  }
+  const Point2 size = hi - lo;
+  const int nx = std::max(1, static_cast<int>(std::ceil(size.x() / (2.0 * tile_half_m))));
+  const int ny = std::max(1, static_cast<int>(std::ceil(size.y() / (2.0 * tile_half_m))));
+  std::vector<Pose2> centres;
+  for (int i = 0; i < nx; ++i) {
+    for (int j = 0; j < ny; ++j) {
+      centres.emplace_back(lo.x() + (i + 0.5) * size.x() / nx, lo.y() + (j + 0.5) * size.y() / ny,
+                           0.0);
+    }
+  }
+  return centres;
+}
+
+// The global search's window: one tile (with a cell of overlap), every turn, no prior.
+WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
+  WindowSearchParams window = params.stages.window_search;
+  window.resolution_m = params.global_resolution_m;
+  window.hit_sigma_m = params.global_hit_sigma_m;
+  window.max_step_range_m = params.global_max_step_range_m;
+  window.half_window_m = params.global_tile_half_m + params.global_resolution_m;
+  window.half_window_rad = M_PI;
+  window.prior_weight = 0.0;
+  window.max_hypotheses = params.global_hypotheses;
+  window.min_relative_score = 0.0;
+  window.max_node_evaluations = params.global_node_evaluations;
+  window.distinct_m = params.distinct_m;
+  window.distinct_rad = params.distinct_rad;
+  return window;
+}
+
+// What a scan is matched against from a sensor pose: the visible map shape (§3), around the
+// scan's field of view, or all around when the pose is only a guess (§4.3). No keyframe: the map
+// is finished and alone is the reference.
+internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
+                                  const Pose2& T_map_sensor, bool all_around,
+                                  const ShapeSlamParams& p) {
+  VisibilityParams visibility = VisibilityForScan(scan, p.visibility, p.shapes.extraction.min_range_m,
+                                                  p.visibility_fov_margin_rad);
+  if (all_around) visibility.fov_rad = 2.0 * M_PI;
+  internal::LocalModel model;
+  for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility)) {
+    model.map.push_back(v.points_sensor);
+  }
+  for (const Polyline& poly : model.map) model.map_coarse.push_back(ForShapeMatching(poly, p.shapes));
+  model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
+  return model;
+}
+
+bool Near(const Pose2& a, const Pose2& b, const LocalizerParams& params) {
+  return (a.Translation() - b.Translation()).norm() <= params.distinct_m &&
+         std::abs(NormalizeAngle(a.theta - b.theta)) <= params.distinct_rad;
+}
+
+// The mean of the last motions (constant velocity), or nullopt.
+std::optional<Pose2> MeanMotion(const std::vector<Pose2>& motions) {
+  if (motions.empty()) return std::nullopt;
+  Pose2 mean(0.0, 0.0, 0.0);
+  for (const Pose2& m : motions) mean.x += m.x, mean.y += m.y, mean.theta += m.theta;
+  const double n = static_cast<double>(motions.size());
+  return Pose2(mean.x / n, mean.y / n, mean.theta / n);
+}
+
+}  // namespace
+
+void LocalizerParams::Validate() const {
+  stages.Validate();
+  InRange(min_inlier_ratio, 0.0, 1.0, "LocalizerParams::min_inlier_ratio");
+  InRange(min_global_fit, 0.0, 1.0, "LocalizerParams::min_global_fit");
+  InRange(global_tile_half_m, 0.1, 1e3, "LocalizerParams::global_tile_half_m");
+  InRange(global_resolution_m, 0.01, 10.0, "LocalizerParams::global_resolution_m");
+  InRange(global_hit_sigma_m, 0.01, 10.0, "LocalizerParams::global_hit_sigma_m");
+  InRange(global_max_step_range_m, 1.0, 1e3, "LocalizerParams::global_max_step_range_m");
+  AtLeastOne(global_node_evaluations, "LocalizerParams::global_node_evaluations");
+  AtLeastOne(global_hypotheses, "LocalizerParams::global_hypotheses");
+  AtLeastOne(max_hypotheses, "LocalizerParams::max_hypotheses");
+  InRange(distinct_m, 0.0, 1e6, "LocalizerParams::distinct_m");
+  InRange(distinct_rad, 0.0, M_PI, "LocalizerParams::distinct_rad");
+  InRange(evidence_decay, 0.0, 0.999, "LocalizerParams::evidence_decay");
+  InRange(ambiguous_margin_samples, 0.0, 1e9, "LocalizerParams::ambiguous_margin_samples");
+  AtLeastOne(lost_after_scans, "LocalizerParams::lost_after_scans");
+  InRange(fit_drop_ratio, 0.0, 1.0, "LocalizerParams::fit_drop_ratio");
+  AtLeastOne(fit_drop_scans, "LocalizerParams::fit_drop_scans");
+  InRange(fit_mean_weight, 1e-6, 1.0, "LocalizerParams::fit_mean_weight");
+}
+
+const char* ToString(LocalizerStatus status) {
+  switch (status) {
+    case LocalizerStatus::kSearching: return "searching";
+    case LocalizerStatus::kAmbiguous: return "ambiguous";
+    case LocalizerStatus::kTracking: return "tracking";
+    case LocalizerStatus::kLost: return "lost";
+  }
+  return "unknown";
+}
+
+Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
+    : params_(Validated(params)),
+      map_(std::move(map)),
+      walls_(MapWalls(map_)),
+      global_search_(walls_, GlobalSearchParams(params_)),
+      tile_centres_(TileCentres(walls_, params_.global_tile_half_m)) {}
+
+void Localizer::SetInitialPose(const Pose2& T_map_robot) {
+  hypotheses_ = {Hypothesis{T_map_robot, 1.0, 0.0, {}, 0}};
+  status_ = LocalizerStatus::kTracking;
+  was_localized_ = true;
+  lost_scans_ = drop_scans_ = 0;
+  fit_mean_ = -1.0;  // set by the first match
+}
+
+// Odometry that never moved since the first scan is none (as in the mapper).
+std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan) {
+  if (!params_.stages.use_odometry || !scan.T_odom_robot) return std::nullopt;
+  if (!first_T_odom_robot_) first_T_odom_robot_ = scan.T_odom_robot;
+  const Pose2 moved = first_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+  constexpr double kUnchanged = 1e-9;
+  odometry_moved_ = odometry_moved_ || moved.Translation().norm() > kUnchanged ||
+                    std::abs(moved.theta) > kUnchanged;
+  if (!odometry_moved_ || !last_T_odom_robot_) return std::nullopt;
+  return last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+}
+
+// One hypothesis through one scan: the per-scan localization of the mapper (candidates from
+// shape matching §4.2-§4.3, the prediction and the window search, candidate selection, §5.1
+// refinement) against the visible map from the predicted pose.
+Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& scan,
+                                     const Hypothesis& hypothesis,
+                                     const std::optional<Pose2>& odometry_delta,
+                                     int lost_scans) const {
+  const ShapeSlamParams& p = params_.stages;
+  Pose2 T_map_robot_pred = hypothesis.T_map_robot;
+  std::optional<Pose2> velocity_hint;
+  if (odometry_delta) {
+    T_map_robot_pred = hypothesis.T_map_robot * *odometry_delta;
+  } else if (const std::optional<Pose2> v = MeanMotion(hypothesis.recent_motions)) {
+    velocity_hint = scan.T_robot_sensor.Inverse() * *v * scan.T_robot_sensor;
+  }
+  const Pose2 T_map_sensor_pred = T_map_robot_pred * scan.T_robot_sensor;
+  Verified verified;
+  verified.T_map_robot = T_map_robot_pred;
+  if (shapes.coarse.empty()) return verified;
+  const internal::LocalModel model =
+      VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p);
+  const internal::Localization loc =
+      internal::Localize(shapes, model, odometry_delta, velocity_hint, lost_scans, p);
+  verified.T_map_robot = T_map_sensor_pred * loc.correction * scan.T_robot_sensor.Inverse();
+  verified.fit = loc.trusted ? loc.inlier_ratio : 0.0;
+  verified.trusted = loc.trusted && loc.inlier_ratio >= params_.min_inlier_ratio;
+  verified.explained =
+      verified.fit *
+      static_cast<double>(
+          internal::AlignmentSamples(shapes.fine, p.matcher.alignment.sample_spacing_m).size());
+  return verified;
+}
+
+// The window search from every tile centre (all turns): the best distinct robot poses of the
+// whole map, best fit first (ties: the earlier tile).
+std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
+                                               const LaserScan& scan) const {
+  const ShapeSlamParams& p = params_.stages;
+  const double spacing = p.matcher.alignment.sample_spacing_m;
+  const std::vector<Point2> samples = internal::Thinned(
+      internal::AlignmentSamples(shapes.fine, spacing), spacing, p.window_search_spacing_m);
+  std::vector<WindowHypothesis> all;
+  for (const Pose2& centre : tile_centres_) {
+    for (const WindowHypothesis& h : global_search_.Search(samples, centre)) all.push_back(h);
+  }
+  std::stable_sort(all.begin(), all.end(), [](const WindowHypothesis& a, const WindowHypothesis& b) {
+    return a.fit > b.fit;
+  });
+  std::vector<Pose2> candidates;  // sensor poses
+  for (const WindowHypothesis& h : all) {
+    if (static_cast<int>(candidates.size()) >= params_.global_hypotheses) break;
+    const bool known = std::any_of(candidates.begin(), candidates.end(),
+                                   [&](const Pose2& c) { return Near(c, h.T_model_scan, params_); });
+    if (!known) candidates.push_back(h.T_model_scan);
+  }
+  for (Pose2& c : candidates) c = c * scan.T_robot_sensor.Inverse();
+  return candidates;
+}
+
+void Localizer::Motion(Hypothesis& hypothesis, const Pose2& T_map_robot) const {
+  hypothesis.recent_motions.push_back(hypothesis.T_map_robot.Inverse() * T_map_robot);
+  if (static_cast<int>(hypothesis.recent_motions.size()) > params_.stages.velocity_window) {
+    hypothesis.recent_motions.erase(hypothesis.recent_motions.begin());
+  }
+  hypothesis.T_map_robot = T_map_robot;
+}
+
+// Every kept hypothesis is tracked through the scan; its evidence decays and gains the fit.
+// One that misses lost_after_scans scans in a row is dropped.
+void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
+                                    const std::optional<Pose2>& odometry_delta) {
+  std::vector<Hypothesis> kept;
+  for (Hypothesis& h : hypotheses_) {
+    const Verified v = Track(shapes, scan, h, odometry_delta, h.misses);
+    Motion(h, v.T_map_robot);
+    h.fit = v.fit;
+    h.evidence = params_.evidence_decay * h.evidence + v.explained;
+    h.misses = v.trusted ? 0 : h.misses + 1;
+    if (h.misses < params_.lost_after_scans) kept.push_back(std::move(h));
+  }
+  hypotheses_ = std::move(kept);
+}
+
+// The global search's poses, each verified by the localization with it as a tight prediction;
+// the trusted ones not already kept become new hypotheses.
+void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan) {
+  for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
+    const Hypothesis probe{candidate, 0.0, 0.0, {}, 0};
+    const Verified v = Track(shapes, scan, probe, Pose2(), 0);
+    if (!v.trusted) continue;
+    const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
+      return Near(h.T_map_robot, v.T_map_robot, params_);
+    });
+    if (!known) hypotheses_.push_back(Hypothesis{v.T_map_robot, v.explained, v.fit, {}, 0});
+  }
+}
+
+// Best evidence first (ties: the older one), near duplicates merged, at most max_hypotheses.
+void Localizer::PruneHypotheses() {
+  std::stable_sort(hypotheses_.begin(), hypotheses_.end(),
+                   [](const Hypothesis& a, const Hypothesis& b) { return a.evidence > b.evidence; });
+  std::vector<Hypothesis> distinct;
+  for (Hypothesis& h : hypotheses_) {
+    const bool duplicate = std::any_of(distinct.begin(), distinct.end(), [&](const Hypothesis& d) {
+      return Near(d.T_map_robot, h.T_map_robot, params_);
+    });
+    if (!duplicate && static_cast<int>(distinct.size()) < params_.max_hypotheses) {
+      distinct.push_back(std::move(h));
+    }
+  }
+  hypotheses_ = std::move(distinct);
+}
+
+// Not localized: the kept hypotheses are propagated, the global search adds new ones, and the
+// best wins when it fits well, matched this scan and no rival has comparable evidence.
+LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& scan,
+                                  const std::optional<Pose2>& odometry_delta) {
+  PropagateHypotheses(shapes, scan, odometry_delta);
+  AddGlobalHypotheses(shapes, scan);
+  PruneHypotheses();
+  LocalizerReport report;
+  report.status = status_;
+  report.hypotheses = static_cast<int>(hypotheses_.size());
+  if (hypotheses_.empty()) return report;
+  const Hypothesis& best = hypotheses_.front();
+  report.T_map_robot = best.T_map_robot;
+  report.inlier_ratio = best.fit;
+  const bool rival = hypotheses_.size() > 1 &&
+                     hypotheses_[1].evidence >= best.evidence - params_.ambiguous_margin_samples;
+  if (rival) report.status = LocalizerStatus::kAmbiguous;
+  if (rival || best.misses > 0 || best.fit < params_.min_global_fit) return report;
+  hypotheses_.resize(1);
+  report.hypotheses = 1;
+  report.status = status_ = LocalizerStatus::kTracking;
+  report.localized = report.matched = true;
+  report.recovered_event = was_localized_;
+  was_localized_ = true;
+  lost_scans_ = drop_scans_ = 0;
+  fit_mean_ = best.fit;
+  return report;
+}
+
+// Localized: the one pose is tracked; too many scans without a trusted match, or a fit that
+// stays far below its running mean, mean the robot is lost (or was carried away).
+LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
+                                     const std::optional<Pose2>& odometry_delta) {
+  Hypothesis& h = hypotheses_.front();
+  const Verified v = Track(shapes, scan, h, odometry_delta, lost_scans_);
+  Motion(h, v.T_map_robot);
+  h.fit = v.fit;
+  LocalizerReport report;
+  report.T_map_robot = v.T_map_robot;
+  report.inlier_ratio = v.fit;
+  report.matched = v.trusted;
+  report.hypotheses = 1;
+  lost_scans_ = v.trusted ? 0 : lost_scans_ + 1;
+  const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
+  drop_scans_ = dropped ? drop_scans_ + 1 : 0;
+  if (v.trusted && !dropped) {
+    fit_mean_ = fit_mean_ < 0.0 ? v.fit
+                                : (1.0 - params_.fit_mean_weight) * fit_mean_ +
+                                      params_.fit_mean_weight * v.fit;
+  }
+  if (lost_scans_ >= params_.lost_after_scans || drop_scans_ >= params_.fit_drop_scans) {
+    hypotheses_.clear();
+    report.status = status_ = LocalizerStatus::kLost;
+    report.lost_event = true;
+    report.hypotheses = 0;
+    return report;
+  }
+  report.status = LocalizerStatus::kTracking;
+  report.localized = true;
+  return report;
+}
+
+LocalizerReport Localizer::Process(const LaserScan& input_scan) {
+  ValidateScan(input_scan);
+  const LaserScan scan = CounterClockwiseScan(input_scan);
+  const ScanShapes shapes = ExtractScanShapes(scan, params_.stages.shapes);
+  const std::optional<Pose2> odometry_delta = OdometryDelta(scan);
+  LocalizerReport report = status_ == LocalizerStatus::kTracking
+                               ? TrackPose(shapes, scan, odometry_delta)
+                               : Search(shapes, scan, odometry_delta);
+  report.timestamp_s = scan.timestamp_s;
+  if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
+  return report;
+}
+
+}  // namespace shape_slam

@@ -1,0 +1,179 @@
+// The localizer (localizer.h) in a known map built from the walls of a simulated scene: it
+// tracks from a given pose, finds the robot without one, notices a kidnapping and recovers,
+// never changes the map, and is deterministic.
+#include "shape_slam/localizer.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <stdexcept>
+
+#include "pose_matchers.h"
+#include "test_scenes.h"
+
+namespace shape_slam {
+namespace {
+
+// A 14 x 10 m hall around an 8 x 4 m block, with alcoves and pillars so that places differ.
+testing::Scene LoopWorld() {
+  testing::Scene s = testing::Room(0.0, 0.0, 14.0, 10.0);
+  const testing::Scene block = testing::Room(3.0, 3.0, 11.0, 7.0);
+  s.insert(s.end(), block.begin(), block.end());
+  testing::AddPillar(s, {0.6, 5.0}, 0.2);
+  testing::AddPillar(s, {13.4, 2.0}, 0.15);
+  testing::AddPillar(s, {7.0, 9.4}, 0.25);
+  s.push_back({{5.0, 0.0}, {5.0, 0.6}});
+  s.push_back({{5.0, 0.6}, {6.0, 0.6}});
+  s.push_back({{9.0, 10.0}, {9.0, 9.4}});
+  s.push_back({{14.0, 6.0}, {13.3, 6.5}});
+  return s;
+}
+
+// The map: every wall of the scene as a polyline.
+PolylineMap SceneMap(const testing::Scene& scene) {
+  PolylineMap map;
+  for (const testing::Wall& w : scene) map.Add({{w.a, w.b}, {1.0, 1.0}, 1, 0});
+  return map;
+}
+
+struct SimRun {
+  std::vector<LaserScan> scans;
+  std::vector<Pose2> truth;
+};
+
+// Around the block at 1.5 m from it (counter-clockwise from `start_corner`), 0.15 m and up to
+// 0.15 rad per scan, with odometry that has 2 % scale error and heading noise.
+SimRun Simulate(int start_corner, int num_scans, unsigned seed) {
+  const testing::Scene world = LoopWorld();
+  std::mt19937 prng(seed);
+  std::normal_distribution<double> n(0.0, 1.0);
+  const std::vector<Point2> corners = {{1.5, 1.5}, {12.5, 1.5}, {12.5, 8.5}, {1.5, 8.5}};
+  SimRun run;
+  Pose2 odom;
+  const Point2 c0 = corners[start_corner % 4], c1 = corners[(start_corner + 1) % 4];
+  Pose2 previous(c0.x(), c0.y(), std::atan2(c1.y() - c0.y(), c1.x() - c0.x()));
+  const auto record = [&](const Pose2& next) {
+    const Pose2 d = previous.Inverse() * next;
+    odom = odom * Pose2(d.x * 1.02 + 0.003 * n(prng), d.y + 0.003 * n(prng),
+                        d.theta + 0.003 * n(prng));
+    LaserScan scan = testing::SimulateScan(world, next, testing::ScannerModel{}, prng);
+    scan.timestamp_s = 100.0 + 0.1 * static_cast<double>(run.scans.size());
+    scan.T_odom_robot = odom;
+    run.scans.push_back(scan);
+    run.truth.push_back(next);
+    previous = next;
+  };
+  for (int c = start_corner; static_cast<int>(run.scans.size()) < num_scans; ++c) {
+    const Point2 a = corners[c % 4], b = corners[(c + 1) % 4];
+    const double heading = std::atan2(b.y() - a.y(), b.x() - a.x());
+    while (std::abs(NormalizeAngle(heading - previous.theta)) > 1e-9) {
+      const double turn = std::clamp(NormalizeAngle(heading - previous.theta), -0.15, 0.15);
+      record(Pose2(previous.x, previous.y, NormalizeAngle(previous.theta + turn)));
+    }
+    const int steps = static_cast<int>(std::ceil((b - a).norm() / 0.15));
+    for (int k = 1; k <= steps; ++k) {
+      const Point2 p = a + (b - a) * (static_cast<double>(k) / steps);
+      record(Pose2(p.x(), p.y(), heading));
+    }
+  }
+  run.scans.resize(num_scans);
+  run.truth.resize(num_scans);
+  return run;
+}
+
+TEST(LocalizerTest, TracksFromAGivenInitialPose) {
+  const SimRun run = Simulate(0, 80, 1);
+  Localizer localizer(SceneMap(LoopWorld()));
+  localizer.SetInitialPose(run.truth[0]);
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    const LocalizerReport report = localizer.Process(run.scans[i]);
+    ASSERT_TRUE(report.localized) << "scan " << i;
+    EXPECT_EQ(report.status, LocalizerStatus::kTracking);
+    EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
+    EXPECT_GT(report.inlier_ratio, 0.8) << "scan " << i;
+  }
+  EXPECT_EQ(localizer.Map().NumPolylines(), LoopWorld().size());  // unchanged
+}
+
+TEST(LocalizerTest, FindsTheRobotWithoutAnInitialPoseWithinFiveScans) {
+  for (const int corner : {0, 1, 2}) {
+    const SimRun run = Simulate(corner, 40, 10 + corner);
+    Localizer localizer(SceneMap(LoopWorld()));
+    int first = -1;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      if (report.localized && first < 0) first = static_cast<int>(i);
+      if (first >= 0) {
+        EXPECT_TRUE(report.localized) << "corner " << corner << " scan " << i;
+        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05))
+            << "corner " << corner << " scan " << i;
+      }
+    }
+    EXPECT_GE(first, 0) << "corner " << corner;
+    EXPECT_LT(first, 5) << "corner " << corner;
+  }
+}
+
+TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
+  // 30 scans from the first corner, then the robot is carried to the opposite side of the
+  // block; its odometry does not know (it continues smoothly from the last pose).
+  const SimRun before = Simulate(0, 30, 3);
+  const SimRun after = Simulate(2, 50, 4);
+  std::vector<LaserScan> scans = before.scans;
+  std::vector<Pose2> truth = before.truth;
+  const Pose2 T_odom_join = *before.scans.back().T_odom_robot * after.scans.front().T_odom_robot->Inverse();
+  for (std::size_t i = 0; i < after.scans.size(); ++i) {
+    LaserScan scan = after.scans[i];
+    scan.timestamp_s = before.scans.back().timestamp_s + 0.1 * static_cast<double>(i + 1);
+    scan.T_odom_robot = T_odom_join * *scan.T_odom_robot;
+    scans.push_back(scan);
+    truth.push_back(after.truth[i]);
+  }
+  Localizer localizer(SceneMap(LoopWorld()));
+  localizer.SetInitialPose(truth[0]);
+  int lost_at = -1, recovered_at = -1;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    const LocalizerReport report = localizer.Process(scans[i]);
+    if (i < before.scans.size()) {
+      EXPECT_TRUE(report.localized) << "scan " << i;
+      EXPECT_FALSE(report.lost_event) << "scan " << i;
+    }
+    if (report.lost_event && lost_at < 0) lost_at = static_cast<int>(i);
+    if (report.recovered_event && recovered_at < 0) recovered_at = static_cast<int>(i);
+    if (recovered_at >= 0) {
+      EXPECT_THAT(report.T_map_robot, IsNearly(truth[i], 0.1, 0.05)) << "scan " << i;
+    }
+  }
+  const int kidnap = static_cast<int>(before.scans.size());
+  EXPECT_GE(lost_at, kidnap);
+  EXPECT_LT(lost_at, kidnap + 5);
+  EXPECT_GT(recovered_at, lost_at);
+  EXPECT_LT(recovered_at, lost_at + 10);
+}
+
+TEST(LocalizerTest, IsDeterministic) {
+  const SimRun run = Simulate(1, 15, 5);
+  Localizer a(SceneMap(LoopWorld())), b(SceneMap(LoopWorld()));
+  for (const LaserScan& scan : run.scans) {
+    const LocalizerReport ra = a.Process(scan), rb = b.Process(scan);
+    EXPECT_EQ(ra.status, rb.status);
+    EXPECT_EQ(ra.T_map_robot.x, rb.T_map_robot.x);
+    EXPECT_EQ(ra.T_map_robot.y, rb.T_map_robot.y);
+    EXPECT_EQ(ra.T_map_robot.theta, rb.T_map_robot.theta);
+  }
+}
+
+TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
+  LocalizerParams params;
+  params.max_hypotheses = 0;
+  EXPECT_THROW(Localizer(SceneMap(LoopWorld()), params), std::invalid_argument);
+  params = LocalizerParams();
+  params.min_inlier_ratio = 1.5;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  EXPECT_THROW(Localizer{PolylineMap{}}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shape_slam
