@@ -146,6 +146,7 @@ int main(int argc, char** argv) {
     const Args args = Parse(argc, argv);
     shape_slam::RegisterMrptClasses();
     shape_slam::CMetricMapBuilderShape builder;
+    builder.setMinLoggingLevel(mrpt::system::LVL_WARN);  // MRPT's "saving map" notes
     Configure(builder, args);
     const std::string path_text = RunLog(builder, args);
     WriteOutputs(builder, args, path_text);

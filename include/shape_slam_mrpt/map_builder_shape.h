@@ -27,6 +27,8 @@
 //    with a fixed map. CMetricMapBuilder::options (enableMapUpdating, debugForceInsertion,
 //    alwaysInsertByClass) are not used: the mapper decides its keyframes itself.
 //
+// Not thread-safe (unlike CMetricMapBuilderICP): call it from one thread.
+//
 // Poses: "map" is the frame of the mapper (its first scan at the origin), "world" the frame the
 // builder reports in (T_world_map = x0).
 #pragma once

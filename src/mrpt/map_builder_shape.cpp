@@ -141,7 +141,6 @@ void CMetricMapBuilderShape::ProcessObservation(const mrpt::obs::CObservation& o
   }
   const auto* range_scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&observation);
   if (range_scan == nullptr) return;
-  std::lock_guard<std::mutex> lock(critZoneChangingMap);
   try {
     LaserScan scan = ToLaserScan(*range_scan);
     scan.T_odom_robot = T_odom_robot_;
