@@ -14,6 +14,10 @@
 #include "shape_slam/pipeline.h"
 #include "shape_slam_io/occupancy_grid.h"
 
+namespace mrpt::maps {
+class CSimpleMap;
+}  // namespace mrpt::maps
+
 namespace shape_slam::io {
 
 /// The gridmap file content: the same cells, size, resolution and origin as `grid`. MRPT's cell
@@ -24,5 +28,10 @@ std::string FormatMrptGridmap(const OccupancyGrid& grid);
 /// The simplemap file content of the keyframes (ShapeSlam::Keyframes()). Throws LogError for a
 /// scan an MRPT 2D range scan cannot hold (rawlog_writer.h), OutputError when compressing fails.
 std::string FormatMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyframes);
+
+/// The simplemap itself (what FormatMrptSimplemap serializes), every pose first composed with
+/// `T_world_map`. Throws LogError as FormatMrptSimplemap.
+mrpt::maps::CSimpleMap MakeMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyframes,
+                                         const Pose2& T_world_map = Pose2());
 
 }  // namespace shape_slam::io

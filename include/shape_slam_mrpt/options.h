@@ -4,7 +4,8 @@
 // groups map options, one ini section each (<prefix> is e.g. "MappingApplication_polylineMap_00"):
 //   [<prefix>_creationOpts]    CreationOptions   (+ MRPT's enableSaveAs3DObject,
 //                                                   enableObservationLikelihood,
-//                                                   enableObservationInsertion)
+//                                                   enableObservationInsertion, and map_file:
+//                                                   a map.polylines the map starts with)
 //   [<prefix>_insertOpts]      InsertionOptions  (extraction, simplification, map update)
 //   [<prefix>_likelihoodOpts]  LikelihoodOptions (observation likelihood for particle filters)
 // Keys are the field names below and those of the core structs they hold: ExtractionParams and
@@ -82,6 +83,13 @@ struct PolylineMapOptions {
 PolylineMapOptions LoadPolylineMapOptions(const mrpt::config::CConfigFileBase& source,
                                           const std::string& prefix,
                                           const PolylineMapOptions& defaults = {});
+
+/// The `map_file` key of <prefix>_creationOpts (comments stripped), or "" when absent: the path
+/// of a map file (shape_slam_io/map_file.h, `shape-slam run`'s map.polylines) whose polylines a
+/// map created from this definition starts with. Relative paths are relative to the current
+/// directory of the process.
+std::string LoadMapFileOption(const mrpt::config::CConfigFileBase& source,
+                              const std::string& prefix);
 
 /// Writes every option as `key = value` lines under "[<prefix>_...Opts]" headers.
 void DumpPolylineMapOptions(const PolylineMapOptions& options, const std::string& prefix,

@@ -81,6 +81,8 @@ class CPolylineMap : public mrpt::maps::CMetricMap {
 
   MAP_DEFINITION_START(CPolylineMap)
   PolylineMapOptions options;
+  /// `map_file` of the creation section (options.h, LoadMapFileOption): polylines to start with.
+  std::string map_file;
   MAP_DEFINITION_END(CPolylineMap)
 
  protected:

@@ -54,6 +54,8 @@ class CPolylinePointsMap : public mrpt::maps::CSimplePointsMap {
 
   MAP_DEFINITION_START(CPolylinePointsMap)
   PolylineMapOptions options;
+  /// `map_file` of the creation section (options.h, LoadMapFileOption): polylines to start with.
+  std::string map_file;
   MAP_DEFINITION_END(CPolylinePointsMap)
 
  protected:

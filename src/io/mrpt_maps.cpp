@@ -62,10 +62,11 @@ std::string FormatMrptGridmap(const OccupancyGrid& grid) {
   return GzipSerialized(map, "grid map");
 }
 
-std::string FormatMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyframes) {
+mrpt::maps::CSimpleMap MakeMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyframes,
+                                         const Pose2& T_world_map) {
   mrpt::maps::CSimpleMap simplemap;
   for (std::size_t i = 0; i < keyframes.size(); ++i) {
-    const Pose2& T = keyframes[i].T_map_robot;
+    const Pose2 T = T_world_map * keyframes[i].T_map_robot;
     auto frame = mrpt::obs::CSensoryFrame::Create();
     frame->insert(mrpt::obs::CObservation2DRangeScan::Create(
         internal::ToMrptScan(keyframes[i].scan, i)));
@@ -73,7 +74,11 @@ std::string FormatMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyf
         mrpt::poses::CPose3D(T.x, T.y, 0.0, T.theta, 0.0, 0.0));
     simplemap.insert(pose, frame);
   }
-  return GzipSerialized(simplemap, "simple map");
+  return simplemap;
+}
+
+std::string FormatMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyframes) {
+  return GzipSerialized(MakeMrptSimplemap(keyframes), "simple map");
 }
 
 }  // namespace shape_slam::io

@@ -72,10 +72,11 @@ double ParseValue(const OptionField& field, const std::string& text, const std::
   return value;
 }
 
-// MRPT's own keys of a creation section (TMapGenericParams), accepted beside ours.
+// MRPT's own keys of a creation section (TMapGenericParams) and map_file (read by
+// LoadMapFileOption), accepted beside ours.
 const std::set<std::string>& GenericKeys() {
   static const std::set<std::string> keys = {"enablesaveas3dobject", "enableobservationlikelihood",
-                                             "enableobservationinsertion"};
+                                             "enableobservationinsertion", "map_file"};
   return keys;
 }
 
@@ -240,6 +241,13 @@ PolylineMapOptions LoadPolylineMapOptions(const mrpt::config::CConfigFileBase& s
     throw std::invalid_argument("ini sections '" + prefix + "_*Opts': " + e.what());
   }
   return options;
+}
+
+std::string LoadMapFileOption(const mrpt::config::CConfigFileBase& source,
+                              const std::string& prefix) {
+  const std::string section = prefix + SectionSuffix(OptionSection::kCreation);
+  if (!source.sectionExists(section)) return "";
+  return StripComment(source.read_string(section, "map_file", ""));
 }
 
 void DumpPolylineMapOptions(const PolylineMapOptions& options, const std::string& prefix,

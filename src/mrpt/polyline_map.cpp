@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "option_fields.h"
+#include "shape_slam_io/map_file.h"
 #include "polyline_geometry.h"
 
 IMPLEMENTS_SERIALIZABLE(CPolylineMap, mrpt::maps::CMetricMap, shape_slam)
@@ -204,16 +205,20 @@ CPolylineMap::TMapDefinition::TMapDefinition() = default;
 void CPolylineMap::TMapDefinition::loadFromConfigFile_map_specific(
     const mrpt::config::CConfigFileBase& source, const std::string& sectionNamePrefix) {
   options = LoadPolylineMapOptions(source, sectionNamePrefix, options);
+  map_file = LoadMapFileOption(source, sectionNamePrefix);
 }
 
 void CPolylineMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
   DumpPolylineMapOptions(options, "<prefix>", out);
+  if (!map_file.empty()) out << "map_file (creation section) = " << map_file << "\n";
 }
 
 mrpt::maps::CMetricMap* CPolylineMap::internal_CreateFromMapDefinition(
     const mrpt::maps::TMetricMapInitializer& def) {
   const auto& definition = dynamic_cast<const CPolylineMap::TMapDefinition&>(def);
-  return new CPolylineMap(definition.options);
+  auto map = std::make_unique<CPolylineMap>(definition.options);
+  if (!definition.map_file.empty()) map->SetMap(io::LoadMapFile(definition.map_file));
+  return map.release();
 }
 
 }  // namespace shape_slam

@@ -3,7 +3,10 @@
 #include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <memory>
 #include <sstream>
+
+#include "shape_slam_io/map_file.h"
 
 IMPLEMENTS_SERIALIZABLE(CPolylinePointsMap, mrpt::maps::CSimplePointsMap, shape_slam)
 
@@ -119,16 +122,20 @@ CPolylinePointsMap::TMapDefinition::TMapDefinition() = default;
 void CPolylinePointsMap::TMapDefinition::loadFromConfigFile_map_specific(
     const mrpt::config::CConfigFileBase& source, const std::string& sectionNamePrefix) {
   options = LoadPolylineMapOptions(source, sectionNamePrefix, options);
+  map_file = LoadMapFileOption(source, sectionNamePrefix);
 }
 
 void CPolylinePointsMap::TMapDefinition::dumpToTextStream_map_specific(std::ostream& out) const {
   DumpPolylineMapOptions(options, "<prefix>", out);
+  if (!map_file.empty()) out << "map_file (creation section) = " << map_file << "\n";
 }
 
 mrpt::maps::CMetricMap* CPolylinePointsMap::internal_CreateFromMapDefinition(
     const mrpt::maps::TMetricMapInitializer& def) {
   const auto& definition = dynamic_cast<const CPolylinePointsMap::TMapDefinition&>(def);
-  return new CPolylinePointsMap(definition.options);
+  auto map = std::make_unique<CPolylinePointsMap>(definition.options);
+  if (!definition.map_file.empty()) map->SetMap(io::LoadMapFile(definition.map_file));
+  return map.release();
 }
 
 }  // namespace shape_slam

@@ -8,12 +8,15 @@
 #include <mrpt/maps/TMetricMapInitializer.h>
 #include <mrpt/rtti/CObject.h>
 
+#include <fstream>
+
 #include <memory>
 #include <stdexcept>
 #include <string>
 
 #include "mrpt/mrpt_test_scenes.h"
 #include "shape_slam/pipeline.h"
+#include "shape_slam_io/map_file.h"
 #include "shape_slam_mrpt/plugin.h"
 #include "shape_slam_mrpt/polyline_map.h"
 #include "shape_slam_mrpt/polyline_points_map.h"
@@ -185,6 +188,34 @@ TEST(MapCreation, TheShippedIniFilesCreateThePluginsMaps) {
       EXPECT_EQ(maps.countMapsByClass<mrpt::maps::CPointsMap>(), 1u);
     }
   }
+}
+
+// pf-localization and other apps create their maps from the ini only: map_file gives the
+// polylines of a saved map.polylines (e.g. `shape-slam run`'s) to start with.
+TEST(MapCreation, MapFileOptionLoadsSavedPolylines) {
+  PolylineMap saved;
+  MapPolyline wall;
+  wall.points = {Point2(0.0, 0.0), Point2(2.0, 0.0), Point2(2.0, 1.5)};
+  wall.support = {1.0, 2.0, 1.0};
+  saved.Add(wall);
+  const std::string path = ::testing::TempDir() + "/map_creation_test.polylines";
+  io::SaveMapFile(path, saved);
+  for (const char* name : {"polylineMap", "polylinePointsMap"}) {
+    const std::string ini = std::string("[m]\n") + name + "_count=1\n[m_" + name +
+                            "_00_creationOpts]\nmap_file = " + path + "\n";
+    mrpt::maps::CMultiMetricMap maps = MapsFromIni(ini, "m");
+    ASSERT_EQ(maps.maps.size(), 1u) << name;
+    const auto* polylines = dynamic_cast<const CPolylineMap*>(maps.maps[0].get());
+    const auto* points = dynamic_cast<const CPolylinePointsMap*>(maps.maps[0].get());
+    const PolylineMap& map = polylines ? polylines->Map() : points->Polylines().Map();
+    EXPECT_EQ(io::FormatMapFile(map), io::FormatMapFile(saved)) << name;
+  }
+  EXPECT_THAT(ErrorOf([] {
+                MapsFromIni("[m]\npolylineMap_count=1\n[m_polylineMap_00_creationOpts]\n"
+                            "map_file = /nonexistent/map.polylines\n",
+                            "m");
+              }),
+              HasSubstr("/nonexistent/map.polylines"));
 }
 
 TEST(MapCreation, InvalidOptionsInCodeThrow) {

@@ -1,0 +1,120 @@
+// shape_slam::CMetricMapBuilderShape: the ShapeSLAM mapper (pipeline.h, ShapeSlam) behind MRPT's
+// mrpt::slam::CMetricMapBuilder, so that a program written for CMetricMapBuilderICP (icp-slam's
+// loop: processActionObservation or processObservation per rawlog entry, then
+// getCurrentPoseEstimation) runs ShapeSLAM instead.
+//
+//  * processActionObservation(actions, frame): the odometry increment of the best
+//    CActionRobotMovement2D is composed onto the odometry pose, then every
+//    CObservation2DRangeScan of the frame goes to ShapeSlam::Process (conversions.h, ToLaserScan)
+//    with that odometry pose; other observations are ignored. This is what `shape-slam run` does
+//    with a rawlog (rawlog_reader.h), so both give the same poses for the same scans.
+//  * processObservation(obs), observations-only rawlogs: a CObservationOdometry sets the
+//    odometry pose (absolute), a CObservation2DRangeScan is processed; others are ignored.
+//  * Scans the core rejects (no beam, bad aperture, no timestamp when others had one, ...) are
+//    skipped and counted (SkippedScans()); the library never prints.
+//  * getCurrentPoseEstimation: the last scan's pose composed with the odometry since that scan,
+//    as a CPose3DPDFGaussian (z, pitch, roll 0 with zero variance); the covariance of (x, y, yaw)
+//    is the refinement's for a matched scan, the floor of the odometry noise model
+//    (OdometryNoiseParams sigma_xy_m, sigma_theta_rad) for a scan placed by prediction.
+//  * getCurrentlyBuiltMap: a CSimpleMap of the keyframes at their corrected poses (as
+//    `shape-slam run` writes map.simplemap); getCurrentlyBuiltMapSize: the number of keyframes.
+//  * getCurrentlyBuiltMetricMap: a CMultiMetricMap holding one shape_slam::CPolylineMap with the
+//    mapper's polylines (updated on demand after a change).
+//  * saveCurrentEstimationToImage: a PNG of the map and the path (whatever formatEMF_BMP says).
+//  * initialize(initialMap, x0): restarts the mapper empty; the map frame is placed at x0's mean
+//    (every pose reported and the polylines of the metric map are x0 * the mapper's). A
+//    non-empty initialMap is not supported (std::invalid_argument): the core cannot be seeded
+//    with a fixed map. CMetricMapBuilder::options (enableMapUpdating, debugForceInsertion,
+//    alwaysInsertByClass) are not used: the mapper decides its keyframes itself.
+//
+// Not thread-safe (unlike CMetricMapBuilderICP): call it from one thread.
+//
+// Poses: "map" is the frame of the mapper (its first scan at the origin), "world" the frame the
+// builder reports in (T_world_map = x0).
+#pragma once
+
+#include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/slam/CMetricMapBuilder.h>
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "shape_slam/pipeline.h"
+#include "shape_slam/types.h"
+
+namespace mrpt::config {
+class CConfigFileBase;
+}  // namespace mrpt::config
+
+namespace shape_slam {
+
+/// Options of CMetricMapBuilderShape.
+struct CMetricMapBuilderShapeOptions {
+  /// The mapper's parameters; defaults are `shape-slam run`'s.
+  ShapeSlamParams params;
+  /// Throws std::invalid_argument naming the offending field.
+  void Validate() const { params.Validate(); }
+};
+
+class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
+ public:
+  using Options = CMetricMapBuilderShapeOptions;
+
+  /// Throws std::invalid_argument when an option is invalid.
+  explicit CMetricMapBuilderShape(const Options& builder_options = {});
+  ~CMetricMapBuilderShape() override;
+
+  const Options& GetOptions() const { return options_; }
+  /// Sets the options and restarts the mapper (as initialize()). Throws std::invalid_argument.
+  void SetOptions(const Options& builder_options);
+  /// Reads `params_file` (a ShapeSLAM parameter ini as `shape-slam run --config` reads,
+  /// config/default.ini) and `use_odometry` (true/false, applied after params_file) from
+  /// `section`, then restarts the mapper. Unknown keys throw std::invalid_argument naming them.
+  void LoadOptions(const mrpt::config::CConfigFileBase& source, const std::string& section);
+
+  /// The mapper itself: Trajectory() (every scan, corrected by the last loop closure),
+  /// Keyframes(), Map(), Odometry(). Poses there are in the map frame (see the file comment).
+  const ShapeSlam& Mapper() const { return *slam_; }
+  /// T_world_map: x0 of the last initialize(), identity by default.
+  const Pose2& WorldFromMap() const { return T_world_map_; }
+  /// The report of the last scan processed, if any.
+  const std::optional<ScanReport>& LastReport() const { return last_report_; }
+  /// Scans skipped because the core rejected them.
+  int SkippedScans() const { return skipped_scans_; }
+
+  /// See the file comment (observations-only rawlogs).
+  void processObservation(const mrpt::obs::CObservation::Ptr& obs);
+
+  // mrpt::slam::CMetricMapBuilder
+  void initialize(const mrpt::maps::CSimpleMap& initialMap = mrpt::maps::CSimpleMap(),
+                  const mrpt::poses::CPosePDF* x0 = nullptr) override;
+  mrpt::poses::CPose3DPDF::Ptr getCurrentPoseEstimation() const override;
+  void processActionObservation(mrpt::obs::CActionCollection& action,
+                                mrpt::obs::CSensoryFrame& observations) override;
+  void getCurrentlyBuiltMap(mrpt::maps::CSimpleMap& out_map) const override;
+  unsigned int getCurrentlyBuiltMapSize() override;
+  const mrpt::maps::CMultiMetricMap* getCurrentlyBuiltMetricMap() const override;
+  void saveCurrentEstimationToImage(const std::string& file, bool formatEMF_BMP = true) override;
+
+ private:
+  void Restart(const Pose2& T_world_map);
+  void ProcessObservation(const mrpt::obs::CObservation& observation);
+  Pose2 CurrentPoseInMap() const;
+
+  Options options_;
+  std::unique_ptr<ShapeSlam> slam_;
+  Pose2 T_world_map_;
+  std::optional<Pose2> T_odom_robot_;       // odometry so far (increments or absolute)
+  std::optional<Pose2> T_odom_last_scan_;   // odometry at the last processed scan
+  std::optional<ScanReport> last_report_;
+  int skipped_scans_ = 0;
+  int keyframes_ = 0;
+  // The CPolylineMap view of the mapper's map, rebuilt when stale.
+  mutable mrpt::maps::CMultiMetricMap metric_map_;
+  mutable bool metric_map_stale_ = true;
+};
+
+}  // namespace shape_slam

@@ -1,0 +1,190 @@
+// CMetricMapBuilderShape: options, input (actions, sensory frames, observations), pose estimate.
+#include "shape_slam_mrpt/map_builder_shape.h"
+
+#include <mrpt/config/CConfigFileBase.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
+#include <mrpt/obs/CObservation2DRangeScan.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/poses/CPose3DPDFGaussian.h>
+#include <mrpt/poses/CPosePDF.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <stdexcept>
+
+#include "shape_slam_io/params_ini.h"
+#include "shape_slam_mrpt/conversions.h"
+
+namespace shape_slam {
+namespace {
+
+bool IsFinite(const Pose2& pose) {
+  return std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta);
+}
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool ParseBool(const std::string& text, const std::string& where) {
+  const std::string v = Lower(text);
+  if (v == "1" || v == "true" || v == "yes" || v == "on") return true;
+  if (v == "0" || v == "false" || v == "no" || v == "off") return false;
+  throw std::invalid_argument(where + ": '" + text + "' is not a boolean (true/false, 1/0)");
+}
+
+// (x, y, yaw) covariance into MRPT's 6x6 order (x, y, z, yaw, pitch, roll).
+mrpt::math::CMatrixDouble66 ToCovariance6(const Eigen::Matrix3d& cov_xyt) {
+  mrpt::math::CMatrixDouble66 cov;
+  cov.setZero();
+  constexpr int kIndex[3] = {0, 1, 3};
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) cov(kIndex[r], kIndex[c]) = cov_xyt(r, c);
+  }
+  return cov;
+}
+
+}  // namespace
+
+CMetricMapBuilderShape::CMetricMapBuilderShape(const Options& builder_options)
+    : options_(builder_options) {
+  options_.Validate();
+  Restart(Pose2());
+}
+
+CMetricMapBuilderShape::~CMetricMapBuilderShape() = default;
+
+void CMetricMapBuilderShape::SetOptions(const Options& builder_options) {
+  builder_options.Validate();
+  options_ = builder_options;
+  Restart(T_world_map_);
+}
+
+void CMetricMapBuilderShape::LoadOptions(const mrpt::config::CConfigFileBase& source,
+                                         const std::string& section) {
+  Options loaded = options_;
+  std::optional<bool> use_odometry;
+  std::vector<std::string> keys;
+  source.getAllKeys(section, keys);
+  for (const std::string& key : keys) {
+    const std::string where = "ini section '" + section + "', key '" + key + "'";
+    const std::string value = source.read_string(section, key, "");
+    if (Lower(key) == "params_file") {
+      try {
+        loaded.params = io::LoadParamsIni(value);
+      } catch (const io::ConfigError& e) {
+        throw std::invalid_argument(where + ": " + e.what());
+      }
+    } else if (Lower(key) == "use_odometry") {
+      use_odometry = ParseBool(value, where);
+    } else {
+      throw std::invalid_argument(where + ": unknown key (known keys: params_file, use_odometry)");
+    }
+  }
+  if (use_odometry) loaded.params.use_odometry = *use_odometry;
+  SetOptions(loaded);
+}
+
+void CMetricMapBuilderShape::Restart(const Pose2& T_world_map) {
+  slam_ = std::make_unique<ShapeSlam>(options_.params);
+  T_world_map_ = T_world_map;
+  T_odom_robot_.reset();
+  T_odom_last_scan_.reset();
+  last_report_.reset();
+  skipped_scans_ = 0;
+  keyframes_ = 0;
+  metric_map_stale_ = true;
+}
+
+void CMetricMapBuilderShape::initialize(const mrpt::maps::CSimpleMap& initialMap,
+                                        const mrpt::poses::CPosePDF* x0) {
+  if (!initialMap.empty()) {
+    throw std::invalid_argument(
+        "shape_slam::CMetricMapBuilderShape::initialize: starting from a non-empty map is not "
+        "supported (the mapper cannot be seeded with a fixed map)");
+  }
+  const Pose2 T_world_map = x0 != nullptr ? ToPose2(x0->getMeanVal()) : Pose2();
+  if (!IsFinite(T_world_map)) {
+    throw std::invalid_argument("shape_slam::CMetricMapBuilderShape::initialize: x0 not finite");
+  }
+  Restart(T_world_map);
+}
+
+void CMetricMapBuilderShape::processActionObservation(mrpt::obs::CActionCollection& action,
+                                                      mrpt::obs::CSensoryFrame& observations) {
+  const mrpt::obs::CActionRobotMovement2D::Ptr movement = action.getBestMovementEstimation();
+  if (movement && movement->poseChange) {
+    const Pose2 increment = ToPose2(movement->poseChange->getMeanVal());
+    if (IsFinite(increment)) T_odom_robot_ = T_odom_robot_.value_or(Pose2()) * increment;
+  }
+  for (const mrpt::obs::CObservation::Ptr& observation : observations) {
+    if (observation) ProcessObservation(*observation);
+  }
+}
+
+void CMetricMapBuilderShape::processObservation(const mrpt::obs::CObservation::Ptr& obs) {
+  if (obs) ProcessObservation(*obs);
+}
+
+// As the rawlog reader (rawlog_reader.cpp): odometry updates the odometry pose, a laser scan is
+// processed with it.
+void CMetricMapBuilderShape::ProcessObservation(const mrpt::obs::CObservation& observation) {
+  if (const auto* odometry = dynamic_cast<const mrpt::obs::CObservationOdometry*>(&observation)) {
+    const Pose2 T_odom_robot = ToPose2(odometry->odometry);
+    if (IsFinite(T_odom_robot)) T_odom_robot_ = T_odom_robot;
+    return;
+  }
+  const auto* range_scan = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&observation);
+  if (range_scan == nullptr) return;
+  try {
+    LaserScan scan = ToLaserScan(*range_scan);
+    scan.T_odom_robot = T_odom_robot_;
+    last_report_ = slam_->Process(scan);
+  } catch (const std::invalid_argument&) {
+    ++skipped_scans_;  // a scan the core cannot use: the mapper state is unchanged
+    return;
+  }
+  T_odom_last_scan_ = T_odom_robot_;
+  if (last_report_->keyframe) ++keyframes_;
+  // A loop closure may move the map without a keyframe flag; cheap to rebuild on demand.
+  metric_map_stale_ = true;
+}
+
+// The last scan's pose, moved on by the odometry since then when the mapper uses odometry.
+Pose2 CMetricMapBuilderShape::CurrentPoseInMap() const {
+  if (!last_report_) return Pose2();
+  Pose2 T_map_robot = last_report_->T_map_robot;
+  if (slam_->Odometry().status == OdometryStatus::kUsed && T_odom_last_scan_ && T_odom_robot_) {
+    T_map_robot = T_map_robot * (T_odom_last_scan_->Inverse() * *T_odom_robot_);
+  }
+  return T_map_robot;
+}
+
+mrpt::poses::CPose3DPDF::Ptr CMetricMapBuilderShape::getCurrentPoseEstimation() const {
+  const Pose2 T = T_world_map_ * CurrentPoseInMap();
+  Eigen::Matrix3d cov_map = Eigen::Matrix3d::Zero();
+  if (last_report_ && last_report_->matched) {
+    cov_map = last_report_->covariance;
+  } else {
+    const OdometryNoiseParams& noise = options_.params.odometry_noise;
+    cov_map.diagonal() << noise.sigma_xy_m * noise.sigma_xy_m, noise.sigma_xy_m * noise.sigma_xy_m,
+        noise.sigma_theta_rad * noise.sigma_theta_rad;
+  }
+  // Rotate the (x, y) block from the map frame into the world frame.
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  R.topLeftCorner<2, 2>() = T_world_map_.Rotation();
+  const Eigen::Matrix3d cov_world = R * cov_map * R.transpose();
+  return mrpt::poses::CPose3DPDFGaussian::Create(
+      mrpt::poses::CPose3D(T.x, T.y, 0.0, T.theta, 0.0, 0.0), ToCovariance6(cov_world));
+}
+
+unsigned int CMetricMapBuilderShape::getCurrentlyBuiltMapSize() {
+  return static_cast<unsigned int>(keyframes_);
+}
+
+}  // namespace shape_slam
