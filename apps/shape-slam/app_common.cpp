@@ -4,6 +4,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <iostream>
 #include <stdexcept>
@@ -118,6 +119,15 @@ LaserScan ReadScanAt(const std::string& path, long long index, bool strict) {
 
 ShapeSlamParams LoadParamsForApp(const std::optional<std::string>& ini_path) {
   return ini_path ? io::LoadParamsIni(*ini_path) : ShapeSlamParams{};
+}
+
+double Percentile(std::vector<double> values, double q) {
+  if (values.empty()) return 0.0;
+  std::sort(values.begin(), values.end());
+  const double position = q * (values.size() - 1);
+  const std::size_t lo = static_cast<std::size_t>(std::floor(position));
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (position - lo) * (values[hi] - values[lo]);
 }
 
 }  // namespace shape_slam::app

@@ -44,4 +44,7 @@ LaserScan ReadScanAt(const std::string& path, long long index, bool strict);
 /// key validated; see config/default.ini).
 ShapeSlamParams LoadParamsForApp(const std::optional<std::string>& ini_path);
 
+/// The q-quantile (0..1, linear interpolation) of the values; 0 when there are none.
+double Percentile(std::vector<double> values, double q);
+
 }  // namespace shape_slam::app

@@ -86,14 +86,6 @@ LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& 
   return out;
 }
 
-double Percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const double position = q * (values.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(position));
-  const std::size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (position - lo) * (values[hi] - values[lo]);
-}
 
 double LocalizedFraction(const LocalizeOutput& out) {
   return out.scans == 0 ? 0.0 : static_cast<double>(out.localized) / out.scans;

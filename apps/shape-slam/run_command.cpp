@@ -97,14 +97,6 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
   return out;
 }
 
-double Percentile(std::vector<double> values, double q) {
-  if (values.empty()) return 0.0;
-  std::sort(values.begin(), values.end());
-  const double position = q * (values.size() - 1);
-  const std::size_t lo = static_cast<std::size_t>(std::floor(position));
-  const std::size_t hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (position - lo) * (values[hi] - values[lo]);
-}
 
 // Bytes of a 5 cm occupancy grid (1 byte per cell, MRPT's 8-bit cells) covering the map's
 // bounding box: the representation the paper compares against.

@@ -18,6 +18,8 @@
 #include "shape_slam_io/params_ini.h"
 #include "shape_slam_mrpt/conversions.h"
 
+#include "option_fields.h"
+
 namespace shape_slam {
 namespace {
 
@@ -25,18 +27,6 @@ bool IsFinite(const Pose2& pose) {
   return std::isfinite(pose.x) && std::isfinite(pose.y) && std::isfinite(pose.theta);
 }
 
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
-bool ParseBool(const std::string& text, const std::string& where) {
-  const std::string v = Lower(text);
-  if (v == "1" || v == "true" || v == "yes" || v == "on") return true;
-  if (v == "0" || v == "false" || v == "no" || v == "off") return false;
-  throw std::invalid_argument(where + ": '" + text + "' is not a boolean (true/false, 1/0)");
-}
 
 // (x, y, yaw) covariance into MRPT's 6x6 order (x, y, z, yaw, pitch, roll).
 mrpt::math::CMatrixDouble66 ToCovariance6(const Eigen::Matrix3d& cov_xyt) {

@@ -21,6 +21,12 @@ struct OptionField {
   std::variant<double*, int*, bool*> target;
 };
 
+/// Lower-case copy (ASCII), for case-insensitive ini keys.
+std::string Lower(std::string s);
+/// An ini boolean (1/0, true/false, yes/no, on/off, any case); throws std::invalid_argument
+/// naming `where` otherwise.
+bool ParseBool(const std::string& text, const std::string& where);
+
 /// Every option, bound to `options`' fields.
 std::vector<OptionField> OptionFields(PolylineMapOptions& options);
 

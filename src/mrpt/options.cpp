@@ -28,12 +28,6 @@ void Fraction(double value, const char* name) {
   }
 }
 
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
 std::string Trim(const std::string& s) {
   const std::size_t a = s.find_first_not_of(" \t\r\n");
   if (a == std::string::npos) return "";
@@ -58,10 +52,7 @@ std::string Where(const std::string& section, const std::string& key) {
 // Parses the text of one value for `field`; throws naming section and key.
 double ParseValue(const OptionField& field, const std::string& text, const std::string& where) {
   if (std::holds_alternative<bool*>(field.target)) {
-    const std::string v = Lower(text);
-    if (v == "1" || v == "true" || v == "yes" || v == "on") return 1.0;
-    if (v == "0" || v == "false" || v == "no" || v == "off") return 0.0;
-    throw std::invalid_argument(where + ": '" + text + "' is not a boolean (true/false, 1/0)");
+    return ParseBool(text, where) ? 1.0 : 0.0;
   }
   errno = 0;
   char* end = nullptr;
@@ -100,6 +91,19 @@ void CheckUnknownKeys(const mrpt::config::CConfigFileBase& source, const std::st
 }
 
 }  // namespace
+
+std::string Lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+bool ParseBool(const std::string& text, const std::string& where) {
+  const std::string v = Lower(text);
+  if (v == "1" || v == "true" || v == "yes" || v == "on") return true;
+  if (v == "0" || v == "false" || v == "no" || v == "off") return false;
+  throw std::invalid_argument(where + ": '" + text + "' is not a boolean (true/false, 1/0)");
+}
 
 const char* SectionSuffix(OptionSection section) {
   switch (section) {

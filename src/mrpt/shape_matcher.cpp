@@ -20,6 +20,8 @@
 #include "shape_slam_mrpt/polyline_map.h"
 #include "shape_slam_mrpt/polyline_points_map.h"
 
+#include "option_fields.h"
+
 namespace shape_slam {
 namespace {
 
@@ -45,18 +47,6 @@ mrpt::math::CMatrixDouble33 ToMrpt(const Eigen::Matrix3d& m) {
   return out;
 }
 
-std::string Lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
-
-bool ParseBool(const std::string& text, const std::string& where) {
-  const std::string v = Lower(text);
-  if (v == "1" || v == "true" || v == "yes" || v == "on") return true;
-  if (v == "0" || v == "false" || v == "no" || v == "off") return false;
-  throw std::invalid_argument(where + ": '" + text + "' is not a boolean (true/false, 1/0)");
-}
 
 double ParseNumber(const std::string& text, const std::string& where) {
   std::size_t used = 0;
