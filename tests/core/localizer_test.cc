@@ -16,21 +16,6 @@
 namespace shape_slam {
 namespace {
 
-// A 14 x 10 m hall around an 8 x 4 m block, with alcoves and pillars so that places differ.
-testing::Scene LoopWorld() {
-  testing::Scene s = testing::Room(0.0, 0.0, 14.0, 10.0);
-  const testing::Scene block = testing::Room(3.0, 3.0, 11.0, 7.0);
-  s.insert(s.end(), block.begin(), block.end());
-  testing::AddPillar(s, {0.6, 5.0}, 0.2);
-  testing::AddPillar(s, {13.4, 2.0}, 0.15);
-  testing::AddPillar(s, {7.0, 9.4}, 0.25);
-  s.push_back({{5.0, 0.0}, {5.0, 0.6}});
-  s.push_back({{5.0, 0.6}, {6.0, 0.6}});
-  s.push_back({{9.0, 10.0}, {9.0, 9.4}});
-  s.push_back({{14.0, 6.0}, {13.3, 6.5}});
-  return s;
-}
-
 // The map: every wall of the scene as a polyline.
 PolylineMap SceneMap(const testing::Scene& scene) {
   PolylineMap map;
@@ -46,7 +31,7 @@ struct SimRun {
 // Around the block at 1.5 m from it (counter-clockwise from `start_corner`), 0.15 m and up to
 // 0.15 rad per scan, with odometry that has 2 % scale error and heading noise.
 SimRun Simulate(int start_corner, int num_scans, unsigned seed) {
-  const testing::Scene world = LoopWorld();
+  const testing::Scene world = testing::LoopWorld();
   std::mt19937 prng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   const std::vector<Point2> corners = {{1.5, 1.5}, {12.5, 1.5}, {12.5, 8.5}, {1.5, 8.5}};
@@ -85,7 +70,7 @@ SimRun Simulate(int start_corner, int num_scans, unsigned seed) {
 
 TEST(LocalizerTest, TracksFromAGivenInitialPose) {
   const SimRun run = Simulate(0, 80, 1);
-  Localizer localizer(SceneMap(LoopWorld()));
+  Localizer localizer(SceneMap(testing::LoopWorld()));
   localizer.SetInitialPose(run.truth[0]);
   for (std::size_t i = 0; i < run.scans.size(); ++i) {
     const LocalizerReport report = localizer.Process(run.scans[i]);
@@ -94,13 +79,13 @@ TEST(LocalizerTest, TracksFromAGivenInitialPose) {
     EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
     EXPECT_GT(report.inlier_ratio, 0.8) << "scan " << i;
   }
-  EXPECT_EQ(localizer.Map().NumPolylines(), LoopWorld().size());  // unchanged
+  EXPECT_EQ(localizer.Map().NumPolylines(), testing::LoopWorld().size());  // unchanged
 }
 
 TEST(LocalizerTest, FindsTheRobotWithoutAnInitialPoseWithinFiveScans) {
   for (const int corner : {0, 1, 2}) {
     const SimRun run = Simulate(corner, 40, 10 + corner);
-    Localizer localizer(SceneMap(LoopWorld()));
+    Localizer localizer(SceneMap(testing::LoopWorld()));
     int first = -1;
     for (std::size_t i = 0; i < run.scans.size(); ++i) {
       const LocalizerReport report = localizer.Process(run.scans[i]);
@@ -131,7 +116,7 @@ TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
     scans.push_back(scan);
     truth.push_back(after.truth[i]);
   }
-  Localizer localizer(SceneMap(LoopWorld()));
+  Localizer localizer(SceneMap(testing::LoopWorld()));
   localizer.SetInitialPose(truth[0]);
   int lost_at = -1, recovered_at = -1;
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -155,7 +140,7 @@ TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
 
 TEST(LocalizerTest, IsDeterministic) {
   const SimRun run = Simulate(1, 15, 5);
-  Localizer a(SceneMap(LoopWorld())), b(SceneMap(LoopWorld()));
+  Localizer a(SceneMap(testing::LoopWorld())), b(SceneMap(testing::LoopWorld()));
   for (const LaserScan& scan : run.scans) {
     const LocalizerReport ra = a.Process(scan), rb = b.Process(scan);
     EXPECT_EQ(ra.status, rb.status);
@@ -168,7 +153,7 @@ TEST(LocalizerTest, IsDeterministic) {
 TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
   LocalizerParams params;
   params.max_hypotheses = 0;
-  EXPECT_THROW(Localizer(SceneMap(LoopWorld()), params), std::invalid_argument);
+  EXPECT_THROW(Localizer(SceneMap(testing::LoopWorld()), params), std::invalid_argument);
   params = LocalizerParams();
   params.min_inlier_ratio = 1.5;
   EXPECT_THROW(params.Validate(), std::invalid_argument);

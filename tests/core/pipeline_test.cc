@@ -14,21 +14,6 @@
 namespace shape_slam {
 namespace {
 
-// A 14 x 10 m hall around a 8 x 4 m block, with alcoves and pillars so that shapes differ.
-testing::Scene LoopWorld() {
-  testing::Scene s = testing::Room(0.0, 0.0, 14.0, 10.0);
-  const testing::Scene block = testing::Room(3.0, 3.0, 11.0, 7.0);
-  s.insert(s.end(), block.begin(), block.end());
-  testing::AddPillar(s, {0.6, 5.0}, 0.2);
-  testing::AddPillar(s, {13.4, 2.0}, 0.15);
-  testing::AddPillar(s, {7.0, 9.4}, 0.25);
-  s.push_back({{5.0, 0.0}, {5.0, 0.6}});
-  s.push_back({{5.0, 0.6}, {6.0, 0.6}});
-  s.push_back({{9.0, 10.0}, {9.0, 9.4}});
-  s.push_back({{14.0, 6.0}, {13.3, 6.5}});
-  return s;
-}
-
 struct SimRun {
   std::vector<LaserScan> scans;
   std::vector<StampedPose> truth;
@@ -37,7 +22,7 @@ struct SimRun {
 // Twice around the block at 1.5 m from it, 0.15 m and up to 0.15 rad per scan; odometry with
 // 3 % scale error and a heading bias, so that it drifts by metres over the run.
 SimRun Simulate(unsigned seed) {
-  const testing::Scene world = LoopWorld();
+  const testing::Scene world = testing::LoopWorld();
   std::mt19937 prng(seed);
   std::normal_distribution<double> n(0.0, 1.0);
   const std::vector<Point2> corners = {{1.5, 1.5}, {12.5, 1.5}, {12.5, 8.5}, {1.5, 8.5}};

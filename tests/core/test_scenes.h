@@ -53,6 +53,22 @@ inline Scene Corridor(double length) {
   return s;
 }
 
+/// A 14 x 10 m hall around an 8 x 4 m block, with alcoves and pillars so that places differ:
+/// a loop to drive around (mapper and localizer tests).
+inline Scene LoopWorld() {
+  Scene s = Room(0.0, 0.0, 14.0, 10.0);
+  const Scene block = Room(3.0, 3.0, 11.0, 7.0);
+  s.insert(s.end(), block.begin(), block.end());
+  AddPillar(s, {0.6, 5.0}, 0.2);
+  AddPillar(s, {13.4, 2.0}, 0.15);
+  AddPillar(s, {7.0, 9.4}, 0.25);
+  s.push_back({{5.0, 0.0}, {5.0, 0.6}});
+  s.push_back({{5.0, 0.6}, {6.0, 0.6}});
+  s.push_back({{9.0, 10.0}, {9.0, 9.4}});
+  s.push_back({{14.0, 6.0}, {13.3, 6.5}});
+  return s;
+}
+
 struct ScannerModel {
   int beams = 181;
   double fov_rad = M_PI;  ///< centred on the sensor's x axis
