@@ -149,6 +149,7 @@ int main(int argc, char** argv) {
     builder.setMinLoggingLevel(mrpt::system::LVL_WARN);  // MRPT's "saving map" notes
     Configure(builder, args);
     const std::string path_text = RunLog(builder, args);
+    builder.Finish();  // final pose-graph optimisation, as `shape-slam run` does
     WriteOutputs(builder, args, path_text);
     const auto& slam = builder.Mapper();
     std::cout << slam.Trajectory().size() << " scans, " << builder.getCurrentlyBuiltMapSize()

@@ -71,7 +71,7 @@ struct RunOutput {
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
   std::size_t matched = 0, keyframes = 0;
-  int loop_closures = 0;
+  int loop_closures = 0, loop_searches = 0, loop_closures_found = 0;
   double processing_s = 0.0;
 };
 
@@ -90,8 +90,11 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
     progress.Update(i + 1);
   }
   progress.Finish();
+  slam.Finish();  // final pose-graph optimisation and map rebuild
   out.trajectory = slam.Trajectory();  // corrected by the last pose-graph optimisation
   out.loop_closures = slam.NumLoopClosures();
+  out.loop_searches = slam.NumLoopSearches();
+  out.loop_closures_found = slam.NumLoopClosuresFound();
   out.processing_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -163,6 +166,8 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("matched_fraction").Value(MatchedFraction(out));
   json.Key("low_match_warning").Value(MatchedFraction(out) < kMinMatchedFraction);
   json.Key("loop_closures").Value(out.loop_closures);
+  json.Key("loop_searches").Value(out.loop_searches);
+  json.Key("loop_closures_found").Value(out.loop_closures_found);
   json.Key("odometry").BeginObject().Key("requested").Value(params.use_odometry);
   json.Key("status").Value(ToString(odometry.status));
   json.Key("scans_with_odometry").Value(odometry.scans_with_odometry);

@@ -23,6 +23,7 @@
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
 #include "shape_slam/evaluation.h"
+#include "shape_slam/loop_closure.h"
 #include "shape_slam/polyline_map.h"
 #include "shape_slam/pose_graph.h"
 #include "shape_slam/scan_matcher.h"
@@ -50,68 +51,6 @@ struct OdometryNoiseParams {
   void Validate() const;
 };
 
-/// Loop closure over a pose graph of keyframes (beyond the paper, which leaves cycle detection
-/// to future work, §7). Every `search_every` keyframes, the nearest older keyframes within
-/// search_radius_m of the estimate, at least min_travel_m of driving ago and seen from a
-/// similar heading, are matched against the new one (shape matching with and without the estimate as guess, then refinement); an
-/// accepted match adds a loop edge, and when that edge disagrees with the graph the graph is
-/// optimised and the map rebuilt from the keyframes at their corrected poses.
-struct LoopClosureParams {
-  bool enabled = true;
-  /// Keyframes between loop searches. A search (shape matching against up to max_candidates
-  /// old keyframes, with and without the estimate as guess) costs several times a scan's
-  /// tracking; measured on the development logs, searching every 4th keyframe instead of every
-  /// 2nd closed the same loops as well and cut the median time per scan by a quarter.
-  int search_every = 4;
-  /// Metres around the estimate. Around a large loop (a hundred metres and more) the drift of a
-  /// few percent reaches several metres before the loop closes; wrong candidates cost little,
-  /// since a closure must match both ways and correct within bounds. Measured on the
-  /// development logs: 4 m found the large loop of one of them too late, 8-12 m all alike.
-  double search_radius_m = 8.0;
-  double min_travel_m = 10.0;       ///< metres driven since the candidate keyframe
-  /// Candidates must have looked within this angle of the current heading (radians).
-  double max_view_angle_rad = 1.2;
-  /// Old keyframes tried per search (spread along the old path), the best match wins.
-  int max_candidates = 3;
-  double min_inlier_ratio = 0.6;    ///< of the new scan explained by the old keyframe
-  double min_reverse_inlier_ratio = 0.4;  ///< of the old keyframe explained by the new scan
-  /// A match whose position standard deviation (refinement covariance, largest direction)
-  /// exceeds this is degenerate (a corridor along its axis) and closes no loop, metres.
-  double max_match_sigma_m = 0.02;
-  /// Edge covariances are the refinement's (which treats samples as independent) times this.
-  double covariance_scale = 10.0;
-  double sigma_floor_m = 0.02;      ///< edge standard deviation at least, metres
-  double sigma_floor_rad = 0.01;    ///< edge standard deviation at least, radians
-  /// A closure may correct the estimate by at most max_correction_rad and by at most
-  /// max(max_correction_m, max_correction_per_m * distance driven since the old keyframe):
-  /// drift is bounded, look-alike places (a corridor turned by 180 deg) are not.
-  double max_correction_rad = 0.5;
-  double max_correction_m = 1.0;
-  double max_correction_per_m = 0.1;
-  /// A closure whose match explains at least this fraction both ways is used at once; a weaker
-  /// one that would correct the graph is only used once a second one, within
-  /// confirm_within_keyframes keyframes, asks for the same correction (within the tolerances).
-  double strong_inlier_ratio = 0.8;
-  int confirm_within_keyframes = 10;
-  double confirm_tolerance_m = 0.2;
-  double confirm_tolerance_per_m = 0.2;  ///< ... plus this fraction of the correction's length
-  double confirm_tolerance_rad = 0.05;
-  /// Candidates are ordered by distance plus this many metres per radian of heading difference
-  /// ...
-  double candidate_turn_weight_m_per_rad = 2.0;
-  /// ... and spread along the old path: no two tried within this much driving of each other.
-  double candidate_spacing_m = 2.0;
-  /// A keyframe whose pose no match confirmed is tied to the previous one by an edge with these
-  /// standard deviations (a weak constraint), metres and radians.
-  double unconfirmed_sigma_m = 0.3;
-  double unconfirmed_sigma_rad = 0.1;
-  /// A loop edge that disagrees with the graph by more than this triggers optimisation.
-  double min_correction_m = 0.05;
-  double min_correction_rad = 0.01;
-  PoseGraphParams graph;
-  void Validate() const;
-};
-
 struct ShapeSlamParams {
   ScanShapesParams shapes;           ///< §3.1 grouping and simplification of each scan
   VisibilityParams visibility;       ///< visible map shape; its fov_rad is set per scan
@@ -136,7 +75,7 @@ struct ShapeSlamParams {
   double coarse_gate_m = 0.6;
   MapUpdateParams map_update;        ///< §5.2
   KeyframeParams keyframe;
-  LoopClosureParams loop_closure;
+  LoopClosureParams loop_closure;   ///< loop_closure.h
   OdometryNoiseParams odometry_noise;
   /// Also match each scan against the last keyframe scan's polylines (besides the visible map):
   /// a fresh, undistorted view of the same place that keeps tracking robust where the map is
@@ -234,6 +173,11 @@ class ShapeSlam {
   /// localised by prediction and leaves the map unchanged).
   ScanReport Process(const LaserScan& scan);
 
+  /// At the end of the log: a final optimisation of the pose graph (when it holds loop edges)
+  /// and the map rebuilt from the keyframes at their corrected poses. Call it before writing the
+  /// outputs; Process may still be called afterwards.
+  void Finish();
+
   const PolylineMap& Map() const { return map_; }
   const ShapeSlamParams& Params() const { return params_; }
 
@@ -243,7 +187,10 @@ class ShapeSlam {
   /// The keyframe pose graph (nodes: keyframes in order; edges: consecutive and loop closures).
   const PoseGraph& Graph() const { return graph_; }
   /// Loop-closure edges accepted so far.
-  int NumLoopClosures() const { return num_loop_closures_; }
+  int NumLoopClosures() const { return loop_closer_.NumLoopClosures(); }
+  /// Loop searches run so far, and closures they found before the consistency check.
+  int NumLoopSearches() const { return loop_closer_.NumSearches(); }
+  int NumLoopClosuresFound() const { return loop_closer_.NumFound(); }
   /// Whether the log's odometry was used (see OdometryStatus).
   const OdometryReport& Odometry() const { return odometry_; }
 
@@ -263,10 +210,7 @@ class ShapeSlam {
     std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry
   };
   struct Keyframe {
-    int node = 0;                        // pose-graph node
     LaserScan scan;                      // counter-clockwise beams
-    std::vector<Polyline> coarse, fine;  // sensor frame
-    double travel_m = 0.0;               // distance driven when it was taken
     bool trusted = false;                // its pose was confirmed by a match
   };
   struct ScanAnchor {
@@ -283,22 +227,14 @@ class ShapeSlam {
                                const Eigen::Matrix3d& covariance) const;
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
                    const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
-  struct LoopEdge {
-    PoseGraphEdge edge;
-    Pose2 correction;  // what the edge asks of the current keyframe's pose, in its own frame
-    int keyframe = 0;  // the keyframe that found it
-    double inlier_ratio = 0.0;
-    double reverse_inlier_ratio = 0.0;
-  };
-  std::vector<int> LoopCandidates() const;
-  std::optional<LoopEdge> MatchLoop(int old_index) const;
-  bool SearchLoop();
   void OptimizeAndRebuild();
 
   ShapeSlamParams params_;
   PolylineMap map_;
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;
+  std::vector<LoopKeyframe> places_;  // the keyframes' shapes, node and travel (same order)
+  LoopCloser loop_closer_;
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
   std::vector<Pose2> recent_motions_;  // T_prev_cur of the last scans, for constant velocity
@@ -306,9 +242,7 @@ class ShapeSlam {
   std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
   OdometryReport odometry_;
   double travel_m_ = 0.0;
-  int num_loop_closures_ = 0;
   int lost_scans_ = 0;  // consecutive scans without a trusted match
-  std::optional<LoopEdge> pending_loop_;
 };
 
 }  // namespace shape_slam

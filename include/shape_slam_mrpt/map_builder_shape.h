@@ -85,6 +85,10 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
   /// Scans skipped because the core rejected them.
   int SkippedScans() const { return skipped_scans_; }
 
+  /// At the end of the log: the mapper's final pose-graph optimisation and map rebuild
+  /// (ShapeSlam::Finish). Call it before saving the map; processing may go on afterwards.
+  void Finish();
+
   /// See the file comment (observations-only rawlogs).
   void processObservation(const mrpt::obs::CObservation::Ptr& obs);
 

@@ -33,21 +33,6 @@ void ValidateScan(const LaserScan& scan) {
   }
 }
 
-// Edge covariance from a refinement covariance: scaled (samples are not independent) and floored.
-Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosureParams& params) {
-  Eigen::Matrix3d c = params.covariance_scale * refined;
-  c = 0.5 * (c + c.transpose()).eval();
-  const double fm = params.sigma_floor_m * params.sigma_floor_m;
-  const double fr = params.sigma_floor_rad * params.sigma_floor_rad;
-  c(0, 0) = std::max(c(0, 0), fm);
-  c(1, 1) = std::max(c(1, 1), fm);
-  c(2, 2) = std::max(c(2, 2), fr);
-  // Keep it positive definite whatever the refinement reported.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(c);
-  if (eig.eigenvalues().minCoeff() <= 1e-12) c += Eigen::Vector3d(fm, fm, fr).asDiagonal();
-  return c;
-}
-
 Eigen::Matrix3d UnconfirmedCovariance(const LoopClosureParams& p) {
   const double m2 = p.unconfirmed_sigma_m * p.unconfirmed_sigma_m;
   return Eigen::Vector3d(m2, m2, p.unconfirmed_sigma_rad * p.unconfirmed_sigma_rad).asDiagonal();
@@ -116,41 +101,6 @@ void ShapeSlamParams::Validate() const {
   }
 }
 
-void LoopClosureParams::Validate() const {
-  if (search_every < 1) throw std::invalid_argument("LoopClosureParams::search_every must be >= 1");
-  if (max_candidates < 1) throw std::invalid_argument("LoopClosureParams::max_candidates must be >= 1");
-  Positive(max_view_angle_rad, "LoopClosureParams::max_view_angle_rad");
-  Positive(max_match_sigma_m, "LoopClosureParams::max_match_sigma_m");
-  if (!(strong_inlier_ratio >= 0.0 && strong_inlier_ratio <= 1.0)) {
-    throw std::invalid_argument("LoopClosureParams::strong_inlier_ratio must be in [0, 1]");
-  }
-  Positive(search_radius_m, "LoopClosureParams::search_radius_m");
-  NonNegative(min_travel_m, "LoopClosureParams::min_travel_m");
-  Positive(covariance_scale, "LoopClosureParams::covariance_scale");
-  Positive(sigma_floor_m, "LoopClosureParams::sigma_floor_m");
-  Positive(sigma_floor_rad, "LoopClosureParams::sigma_floor_rad");
-  NonNegative(min_correction_m, "LoopClosureParams::min_correction_m");
-  NonNegative(min_correction_rad, "LoopClosureParams::min_correction_rad");
-  Positive(max_correction_rad, "LoopClosureParams::max_correction_rad");
-  if (confirm_within_keyframes < 1) {
-    throw std::invalid_argument("LoopClosureParams::confirm_within_keyframes must be >= 1");
-  }
-  NonNegative(confirm_tolerance_m, "LoopClosureParams::confirm_tolerance_m");
-  NonNegative(confirm_tolerance_rad, "LoopClosureParams::confirm_tolerance_rad");
-  NonNegative(confirm_tolerance_per_m, "LoopClosureParams::confirm_tolerance_per_m");
-  NonNegative(candidate_turn_weight_m_per_rad, "LoopClosureParams::candidate_turn_weight_m_per_rad");
-  NonNegative(candidate_spacing_m, "LoopClosureParams::candidate_spacing_m");
-  Positive(unconfirmed_sigma_m, "LoopClosureParams::unconfirmed_sigma_m");
-  Positive(unconfirmed_sigma_rad, "LoopClosureParams::unconfirmed_sigma_rad");
-  Positive(max_correction_m, "LoopClosureParams::max_correction_m");
-  NonNegative(max_correction_per_m, "LoopClosureParams::max_correction_per_m");
-  if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0) ||
-      !(min_reverse_inlier_ratio >= 0.0 && min_reverse_inlier_ratio <= 1.0)) {
-    throw std::invalid_argument("LoopClosureParams: inlier ratios must be in [0, 1]");
-  }
-  graph.Validate();
-}
-
 ScanMatchParams ToScanMatchParams(const ShapeSlamParams& params) {
   ScanMatchParams scan_match;
   scan_match.shapes = params.shapes;
@@ -179,7 +129,9 @@ const char* ToString(OdometryStatus status) {
 }
 
 ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
-    : params_(params), map_(params.index_cell_size_m) {
+    : params_(params),
+      map_(params.index_cell_size_m),
+      loop_closer_(params.loop_closure, ToScanMatchParams(params)) {
   params_.Validate();
   if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
 }
@@ -226,7 +178,7 @@ bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
          std::abs(moved.theta) >= params_.keyframe.min_rotation_rad;
 }
 
-Pose2 ShapeSlam::KeyframePose(int keyframe) const { return graph_.Node(keyframes_[keyframe].node); }
+Pose2 ShapeSlam::KeyframePose(int keyframe) const { return graph_.Node(places_[keyframe].node); }
 
 // The consecutive edge: the scan aligned to the previous keyframe alone, not to the map, so that
 // a pose corrected against older parts of the map enters the graph as a loop closure (found by
@@ -236,19 +188,20 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
                                         const Eigen::Matrix3d& covariance) const {
   const int previous = static_cast<int>(keyframes_.size()) - 1;
   const Keyframe& prev = keyframes_[previous];
+  const std::vector<Polyline>& prev_fine = places_[previous].shapes.fine;
   PoseGraphEdge edge;
-  edge.from = prev.node;
+  edge.from = places_[previous].node;
   edge.T_from_to = KeyframePose(previous).Inverse() * T_map_robot;
   // An unconfirmed step (odometry or nothing) is a weak constraint.
   edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
                             : UnconfirmedCovariance(params_.loop_closure);
   const std::vector<Point2> samples =
       internal::AlignmentSamples(fine, params_.matcher.alignment.sample_spacing_m);
-  if (samples.empty() || prev.fine.empty()) return edge;
+  if (samples.empty() || prev_fine.empty()) return edge;
   const Pose2 estimate = prev.scan.T_robot_sensor.Inverse() * edge.T_from_to * scan.T_robot_sensor;
   const RefinementResult local =
-      RefineAlignment(samples, prev.fine, estimate, std::nullopt, params_.refinement);
-  const internal::ModelIcp check(prev.fine, params_.matcher.inlier_distance_m,
+      RefineAlignment(samples, prev_fine, estimate, std::nullopt, params_.refinement);
+  const internal::ModelIcp check(prev_fine, params_.matcher.inlier_distance_m,
                                  params_.matcher.inlier_distance_m);
   if (local.converged && check.InlierRatio(samples, local.T_map_scan) >= params_.min_inlier_ratio) {
     edge.T_from_to = prev.scan.T_robot_sensor * local.T_map_scan * scan.T_robot_sensor.Inverse();
@@ -268,130 +221,31 @@ void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
     edge->to = node;
     graph_.AddEdge(*edge);
   }
-  keyframes_.push_back({node, scan, std::move(coarse), std::move(fine), travel_m_, trusted});
-}
-
-// Keyframes within the search radius that lie far enough back along the path and looked the
-// same way (a view from the opposite direction shares little with a 180 deg scanner's),
-// nearest first by distance plus heading difference (1 rad counted as 2 m).
-std::vector<int> ShapeSlam::LoopCandidates() const {
-  const LoopClosureParams& p = params_.loop_closure;
-  const int current = static_cast<int>(keyframes_.size()) - 1;
-  const Pose2 P_now = KeyframePose(current);
-  std::vector<std::pair<double, int>> scored;
-  for (int k = 0; k < current; ++k) {
-    if (keyframes_[current].travel_m - keyframes_[k].travel_m < p.min_travel_m) break;  // in order
-    const Pose2 P = KeyframePose(k);
-    const double d = (P.Translation() - P_now.Translation()).norm();
-    const double turn = std::abs(NormalizeAngle(P.theta - P_now.theta));
-    if (d <= p.search_radius_m && turn <= p.max_view_angle_rad) {
-      scored.emplace_back(d + p.candidate_turn_weight_m_per_rad * turn, k);
-    }
-  }
-  std::sort(scored.begin(), scored.end());
-  std::vector<int> candidates;
-  for (const auto& [score, k] : scored) {
-    // Neighbouring keyframes see nearly the same: spread the tries along the old path.
-    const bool near_tried = std::any_of(candidates.begin(), candidates.end(), [&, k = k](int c) {
-      return std::abs(keyframes_[c].travel_m - keyframes_[k].travel_m) < p.candidate_spacing_m;
-    });
-    if (!near_tried) candidates.push_back(k);
-    if (static_cast<int>(candidates.size()) >= p.max_candidates) break;
-  }
-  return candidates;
-}
-
-// Matches the newest keyframe against an old one; the loop edge when the match is good and its
-// correction plausible. Drift since the old keyframe is bounded: a closure demanding more is a
-// look-alike place (a corridor fits itself turned by 180 deg).
-std::optional<ShapeSlam::LoopEdge> ShapeSlam::MatchLoop(int old_index) const {
-  const LoopClosureParams& p = params_.loop_closure;
-  const int current = static_cast<int>(keyframes_.size()) - 1;
-  const Keyframe& now = keyframes_[current];
-  const Keyframe& old = keyframes_[old_index];
-  const Pose2 T_old_now = KeyframePose(old_index).Inverse() * KeyframePose(current);
-  const Pose2 estimate = old.scan.T_robot_sensor.Inverse() * T_old_now * now.scan.T_robot_sensor;
-  const std::optional<internal::KeyframeMatch> m =
-      internal::MatchKeyframe({now.coarse, now.fine}, {old.coarse, old.fine}, estimate, params_);
-  if (!m || m->inlier_ratio < p.min_inlier_ratio ||
-      m->reverse_inlier_ratio < p.min_reverse_inlier_ratio) {
-    return std::nullopt;
-  }
-  // A match that leaves a direction unconstrained (a straight corridor along its axis) cannot
-  // tell where along it the robot is: no closure from it.
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(m->covariance.topLeftCorner<2, 2>());
-  if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > p.max_match_sigma_m) return std::nullopt;
-  LoopEdge loop;
-  loop.edge = {old.node, now.node,
-               old.scan.T_robot_sensor * m->T_keyframe_scan * now.scan.T_robot_sensor.Inverse(),
-               EdgeCovariance(m->covariance, p), true};
-  loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
-  loop.inlier_ratio = m->inlier_ratio;
-  loop.reverse_inlier_ratio = m->reverse_inlier_ratio;
-  loop.keyframe = current;
-  const double travelled = now.travel_m - old.travel_m;
-  if (std::abs(loop.correction.theta) > p.max_correction_rad ||
-      loop.correction.Translation().norm() >
-          std::max(p.max_correction_m, p.max_correction_per_m * travelled)) {
-    return std::nullopt;
-  }
-  return loop;
-}
-
-// Every search_every keyframes: looks for a loop closure. A closure that agrees with the graph
-// is added at once; one that would correct it is held until a second closure soon after asks
-// for the same correction (a single look-alike match must not bend the map). Returns true when
-// the graph needs optimising.
-bool ShapeSlam::SearchLoop() {
-  const LoopClosureParams& p = params_.loop_closure;
-  const int current = static_cast<int>(keyframes_.size()) - 1;
-  if (!p.enabled || current % p.search_every != 0) return false;
-  std::optional<LoopEdge> loop;
-  for (const int old : LoopCandidates()) {
-    std::optional<LoopEdge> candidate = MatchLoop(old);
-    if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = candidate;
-  }
-  if (!loop) return false;
-  const Pose2& c = loop->correction;
-  if (c.Translation().norm() <= p.min_correction_m && std::abs(c.theta) <= p.min_correction_rad) {
-    graph_.AddEdge(loop->edge);
-    ++num_loop_closures_;
-    return false;
-  }
-  if (loop->inlier_ratio >= p.strong_inlier_ratio && loop->reverse_inlier_ratio >= p.strong_inlier_ratio) {
-    graph_.AddEdge(loop->edge);  // a strong match needs no confirmation
-    ++num_loop_closures_;
-    pending_loop_.reset();
-    return true;
-  }
-  const bool confirmed =
-      pending_loop_ && current - pending_loop_->keyframe <= p.confirm_within_keyframes &&
-      (pending_loop_->correction.Translation() - c.Translation()).norm() <=
-          p.confirm_tolerance_m + p.confirm_tolerance_per_m * c.Translation().norm() &&
-      std::abs(NormalizeAngle(pending_loop_->correction.theta - c.theta)) <= p.confirm_tolerance_rad;
-  if (!confirmed) {
-    pending_loop_ = loop;
-    return false;
-  }
-  graph_.AddEdge(pending_loop_->edge);
-  graph_.AddEdge(loop->edge);
-  num_loop_closures_ += 2;
-  pending_loop_.reset();
-  return true;
+  keyframes_.push_back({scan, trusted});
+  places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
 }
 
 // Optimises the pose graph, then rebuilds the map from every keyframe at its corrected pose.
 void ShapeSlam::OptimizeAndRebuild() {
   graph_.Optimize(params_.loop_closure.graph);
   map_.Clear();
-  for (const Keyframe& kf : keyframes_) {
-    const Pose2 T_map_sensor = graph_.Node(kf.node) * kf.scan.T_robot_sensor;
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    const Keyframe& kf = keyframes_[k];
+    const Pose2 T_map_sensor = graph_.Node(places_[k].node) * kf.scan.T_robot_sensor;
     std::vector<Polyline> perceived;
-    for (const Polyline& p : kf.fine) perceived.push_back(Transform(T_map_sensor, p));
+    for (const Polyline& p : places_[k].shapes.fine) perceived.push_back(Transform(T_map_sensor, p));
     const std::vector<VisiblePolyline> visible =
         map_.Visible(T_map_sensor, VisibilityFor(kf.scan, false, params_));
     UpdateMap(map_, perceived, T_map_sensor, visible, kf.scan, kf.trusted || map_.Empty(),
               params_.map_update);
+  }
+}
+
+void ShapeSlam::Finish() {
+  const auto& edges = graph_.Edges();
+  if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
+    OptimizeAndRebuild();
+    if (!keyframes_.empty()) last_T_map_robot_ = Trajectory().back().pose;
   }
 }
 
@@ -427,12 +281,12 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     for (const Polyline& p : model.map) model.map_coarse.push_back(ForShapeMatching(p, params_.shapes));
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
     if (params_.use_last_keyframe && !keyframes_.empty()) {
-      const Keyframe& last = keyframes_.back();
+      const LoopKeyframe& last = places_.back();
       const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() *
                                     KeyframePose(static_cast<int>(keyframes_.size()) - 1) *
-                                    last.scan.T_robot_sensor;
-      for (const Polyline& p : last.coarse) model.recent_coarse.push_back(Transform(T_pred_keyframe, p));
-      for (const Polyline& p : last.fine) model.recent_fine.push_back(Transform(T_pred_keyframe, p));
+                                    last.T_robot_sensor;
+      for (const Polyline& p : last.shapes.coarse) model.recent_coarse.push_back(Transform(T_pred_keyframe, p));
+      for (const Polyline& p : last.shapes.fine) model.recent_fine.push_back(Transform(T_pred_keyframe, p));
     }
     std::optional<Pose2> velocity_hint;
     if (prediction.T_pred_robot_velocity) {
@@ -475,7 +329,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     report.keyframe = true;
     AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), report.T_map_robot,
                 trusted, loc.covariance);
-    if (SearchLoop()) {
+    if (loop_closer_.Update(places_, graph_)) {
       OptimizeAndRebuild();
       report.T_map_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
     }
@@ -492,7 +346,9 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {
   std::vector<KeyframeView> views;
   views.reserve(keyframes_.size());
-  for (const Keyframe& kf : keyframes_) views.push_back({kf.scan, graph_.Node(kf.node)});
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    views.push_back({keyframes_[k].scan, graph_.Node(places_[k].node)});
+  }
   return views;
 }
 

@@ -173,6 +173,11 @@ mrpt::poses::CPose3DPDF::Ptr CMetricMapBuilderShape::getCurrentPoseEstimation() 
       mrpt::poses::CPose3D(T.x, T.y, 0.0, T.theta, 0.0, 0.0), ToCovariance6(cov_world));
 }
 
+void CMetricMapBuilderShape::Finish() {
+  slam_->Finish();
+  metric_map_stale_ = true;
+}
+
 unsigned int CMetricMapBuilderShape::getCurrentlyBuiltMapSize() {
   return static_cast<unsigned int>(keyframes_);
 }

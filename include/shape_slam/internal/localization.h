@@ -64,18 +64,4 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
                       const std::optional<Pose2>& velocity_hint, int lost_scans,
                       const ShapeSlamParams& params);
 
-/// A scan matched against one keyframe's shapes (a loop closure candidate).
-struct KeyframeMatch {
-  Pose2 T_keyframe_scan;          ///< sensor frames
-  Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
-  double inlier_ratio = 0.0;      ///< scan samples explained by the keyframe
-  double reverse_inlier_ratio = 0.0;  ///< keyframe samples explained by the scan
-};
-
-/// Matches a scan against a keyframe (both in their own sensor frames), by shape matching with
-/// the estimate as guess and without a guess (§4.3), each refined; the best fit, or nullopt.
-std::optional<KeyframeMatch> MatchKeyframe(const Shapes& scan, const Shapes& keyframe,
-                                           const Pose2& T_keyframe_scan_estimate,
-                                           const ShapeSlamParams& params);
-
 }  // namespace shape_slam::internal

@@ -1,0 +1,187 @@
+// Loop closure over the keyframe pose graph (beyond the paper, which leaves cycle detection to
+// future work, §7): candidates, matching, verification and acceptance.
+//
+//   candidates    old keyframes within a search region that grows with the uncertainty of the
+//                 current pose relative to them: the distance along the pose graph (driving,
+//                 shortened by the loops already closed) times a drift rate, so that the region
+//                 is small right after a closure and covers the drift around a large loop;
+//   matching      the new keyframe against a submap of the old place (the candidate keyframe and
+//                 its neighbours along the old path), by shape without a guess (§4.3: the drift
+//                 may exceed what a guess-based match tolerates) and with the estimate as guess,
+//                 each finished by the Ceres refinement (alignment_refinement.h);
+//   verification  both sides must explain each other (inlier ratios both ways), the match must
+//                 constrain every direction (no closure along a featureless corridor), and the
+//                 correction it asks of the graph must lie within the uncertainty;
+//   acceptance    a closure that corrects the graph by more than the base bound waits until
+//                 another one agrees with it: the cycle the two form through the graph must close
+//                 within a tolerance that grows with the length of its chains (pairwise
+//                 consistency, as in Olson's single-cluster graph partitioning and Mangelson's
+//                 PCM). Loop edges get a robust (Cauchy) loss in the graph (pose_graph.h).
+#pragma once
+
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "shape_slam/pose_graph.h"
+#include "shape_slam/scan_matcher.h"
+#include "shape_slam/scan_shapes.h"
+#include "shape_slam/types.h"
+
+namespace shape_slam {
+
+struct LoopClosureParams {
+  bool enabled = true;
+  /// Keyframes between loop searches. A search (shape matching against up to max_candidates
+  /// old places, with and without the estimate as guess) costs several times a scan's
+  /// tracking; measured on the development logs, searching every 4th keyframe instead of every
+  /// 2nd closed the same loops as well and cut the median time per scan by a quarter.
+  int search_every = 4;
+  /// The search region around the estimate: search_radius_m plus search_radius_per_m times the
+  /// distance along the pose graph to the old keyframe (driving, shortened by closed loops),
+  /// at most max_search_radius_m. Shape matching needs no guess, so a wide region costs only
+  /// the candidates tried; wrong candidates are caught by the verification.
+  double search_radius_m = 8.0;
+  double search_radius_per_m = 0.10;
+  double max_search_radius_m = 60.0;
+  double min_travel_m = 10.0;       ///< metres driven since the candidate keyframe
+  /// Candidates must have looked within this angle of the current heading (radians), plus the
+  /// heading uncertainty (max_correction_rad_per_m per metre of graph distance). The submap
+  /// holds views from along the old path, so a place driven through the other way is matched
+  /// as well: pi (the default) accepts every heading.
+  double max_view_angle_rad = M_PI;
+  /// Old places tried per search (spread along the old path); the best verified match wins.
+  /// The best-ranked one is tried at every search, the others in turn (the region can hold
+  /// many more places than a search tries).
+  int max_candidates = 3;
+  /// The old place is the candidate keyframe and the keyframes within this much driving of it
+  /// (before and after; every submap_step_m of driving, the candidate's frame), metres: a
+  /// corridor driven the other way was seen by keyframes up to a scan's range ahead.
+  double submap_travel_m = 6.0;
+  double submap_step_m = 1.0;
+  /// The window search (window_search.h) over the submap: the place's polylines as a
+  /// likelihood field, searched around the estimate (half window = the correction bound, at
+  /// most window_half_m) or, when the bound is larger, around the candidate itself, every
+  /// heading the bound allows.
+  double window_half_m = 6.0;
+  double window_resolution_m = 0.15;
+  int window_max_evaluations = 40000;
+  double min_inlier_ratio = 0.6;    ///< of the new scan explained by the old place
+  /// Of the old place's samples that the new scan could have seen (in its field of view and
+  /// range, not behind what it saw), this fraction must be explained by the new scan.
+  double min_reverse_inlier_ratio = 0.4;
+  /// A match whose position standard deviation (refinement covariance, largest direction)
+  /// exceeds this is degenerate (a corridor along its axis) and closes no loop, metres.
+  double max_match_sigma_m = 0.02;
+  /// Edge covariances are the refinement's (which treats samples as independent) times this.
+  double covariance_scale = 10.0;
+  double sigma_floor_m = 0.02;      ///< edge standard deviation at least, metres
+  double sigma_floor_rad = 0.01;    ///< edge standard deviation at least, radians
+  /// The uncertainty a closure may correct: at most max(max_correction_m, max_correction_per_m
+  /// * graph distance) (and within the search region) and max_correction_rad +
+  /// max_correction_rad_per_m * graph distance (at most pi): drift is bounded, look-alike
+  /// places far off are not.
+  double max_correction_m = 1.0;
+  double max_correction_per_m = 0.1;
+  double max_correction_rad = 0.5;
+  double max_correction_rad_per_m = 0.003;
+  /// A closure whose match explains at least this fraction both ways and that corrects the
+  /// graph by at most max_correction_m and max_correction_rad is used at once; any other one
+  /// that would correct the graph waits (confirm_within_keyframes keyframes at most) for a
+  /// second closure that is consistent with it.
+  double strong_inlier_ratio = 0.8;
+  int confirm_within_keyframes = 10;
+  /// Two closures are consistent when the cycle they form through the graph (old keyframe ->
+  /// loop -> new keyframe -> graph -> other new keyframe -> loop -> other old keyframe -> graph
+  /// -> first old keyframe) closes within confirm_tolerance_m (+ confirm_tolerance_per_m per
+  /// metre of its two graph chains) and confirm_tolerance_rad (+ confirm_tolerance_rad_per_m).
+  double confirm_tolerance_m = 0.2;
+  double confirm_tolerance_per_m = 0.02;
+  double confirm_tolerance_rad = 0.05;
+  double confirm_tolerance_rad_per_m = 0.002;
+  /// Candidates are ordered by (distance plus this many metres per radian of heading
+  /// difference) relative to their search radius ...
+  double candidate_turn_weight_m_per_rad = 2.0;
+  /// ... and spread along the old path: no two tried within this much driving of each other.
+  double candidate_spacing_m = 2.0;
+  /// A keyframe whose pose no match confirmed is tied to the previous one by an edge with these
+  /// standard deviations (a weak constraint), metres and radians.
+  double unconfirmed_sigma_m = 0.3;
+  double unconfirmed_sigma_rad = 0.1;
+  /// A loop edge that disagrees with the graph by more than this triggers optimisation.
+  double min_correction_m = 0.05;
+  double min_correction_rad = 0.01;
+  PoseGraphParams graph;
+  /// Throws std::invalid_argument naming the offending field.
+  void Validate() const;
+};
+
+/// Covariance of a pose-graph edge from a refinement covariance: scaled by covariance_scale
+/// (the refinement treats samples as independent), floored, kept positive definite.
+Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosureParams& params);
+
+/// A keyframe as loop closure sees it.
+struct LoopKeyframe {
+  int node = 0;             ///< its pose-graph node
+  ScanShapes shapes;        ///< its polylines, sensor frame (coarse: matching; fine: alignment)
+  Pose2 T_robot_sensor;
+  double travel_m = 0.0;    ///< distance driven when it was taken
+};
+
+/// A loop closure found by a search.
+struct LoopClosure {
+  PoseGraphEdge edge;       ///< robot frames; edge.loop is true
+  int old_keyframe = 0;
+  int new_keyframe = 0;
+  Pose2 correction;         ///< what the edge asks of the new keyframe's pose, in its frame
+  double inlier_ratio = 0.0;
+  double reverse_inlier_ratio = 0.0;
+  double graph_distance_m = 0.0;  ///< along the graph between the two keyframes, when found
+};
+
+class LoopCloser {
+ public:
+  /// `match`: the shape matching, selection and refinement settings (the mapper's own,
+  /// ToScanMatchParams). Throws std::invalid_argument on invalid parameters.
+  LoopCloser(const LoopClosureParams& params, const ScanMatchParams& match);
+
+  /// Called after every new keyframe (the last of `keyframes`, whose node the graph holds).
+  /// Every search_every keyframes: searches, verifies and adds the accepted loop edges to the
+  /// graph. Returns true when an accepted edge disagrees with the graph (optimise it).
+  bool Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph);
+
+  /// Loop edges accepted so far.
+  int NumLoopClosures() const { return num_accepted_; }
+  /// Loop searches run and closures found (verified, before acceptance) so far.
+  int NumSearches() const { return num_searches_; }
+  int NumFound() const { return num_found_; }
+
+  /// The candidates of a search for the last keyframe, best first (exposed for tests).
+  std::vector<int> Candidates(const std::vector<LoopKeyframe>& keyframes,
+                              const PoseGraph& graph) const;
+  /// Matches the last keyframe against the place around keyframe `old`: the verified closure,
+  /// or nullopt (exposed for tests).
+  std::optional<LoopClosure> Match(const std::vector<LoopKeyframe>& keyframes,
+                                   const PoseGraph& graph, int old) const;
+  /// Whether two closures agree (the cycle they form through the graph closes, see
+  /// confirm_tolerance_*).
+  bool Consistent(const LoopClosure& a, const LoopClosure& b,
+                  const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
+
+ private:
+  std::vector<double> GraphDistances(const std::vector<LoopKeyframe>& keyframes,
+                                     const PoseGraph& graph, int from) const;
+  double SearchRadius(double graph_distance_m) const;
+  double CorrectionBoundM(double graph_distance_m) const;
+  double CorrectionBoundRad(double graph_distance_m) const;
+
+  LoopClosureParams params_;
+  ScanMatchParams match_;
+  std::vector<LoopClosure> pending_;
+  mutable int round_robin_ = 0;  // turn of the candidates after the best-ranked one
+  int num_accepted_ = 0;
+  int num_searches_ = 0;
+  int num_found_ = 0;
+};
+
+}  // namespace shape_slam

@@ -1,0 +1,432 @@
+#include "shape_slam/loop_closure.h"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <queue>
+#include <stdexcept>
+#include <string>
+#include <utility>
+
+#include "shape_slam/candidate_selection.h"
+#include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/model_segments.h"
+#include "shape_slam/shape_matcher.h"
+#include "shape_slam/window_search.h"
+
+namespace shape_slam {
+namespace {
+
+void Positive(double value, const std::string& name) {
+  if (!(value > 0.0) || !std::isfinite(value)) throw std::invalid_argument(name + " must be > 0");
+}
+
+void NonNegative(double value, const std::string& name) {
+  if (!(value >= 0.0) || !std::isfinite(value)) throw std::invalid_argument(name + " must be >= 0");
+}
+
+void Fraction(double value, const std::string& name) {
+  if (!(value >= 0.0 && value <= 1.0)) throw std::invalid_argument(name + " must be in [0, 1]");
+}
+
+Pose2 SensorPose(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph, int k) {
+  return graph.Node(keyframes[k].node) * keyframes[k].T_robot_sensor;
+}
+
+// The old place: the candidate keyframe's polylines for shape matching (one view, in the
+// counter-clockwise order §4 relies on) and, for the window search, the alignment and the fit,
+// those of its neighbours along the old path too (one every submap_step_m of driving within
+// submap_travel_m), all in the candidate's sensor frame.
+struct Place {
+  std::vector<Polyline> coarse;
+  std::vector<Polyline> fine;
+};
+
+Place OldPlace(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph, int old,
+               const LoopClosureParams& p) {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  Place place;
+  place.coarse = keyframes[old].shapes.coarse;
+  const Pose2 T_old_map = SensorPose(keyframes, graph, old).Inverse();
+  double last_taken = -std::numeric_limits<double>::infinity();
+  for (int j = 0; j < current; ++j) {
+    const double apart = keyframes[j].travel_m - keyframes[old].travel_m;
+    const bool old_enough = keyframes[current].travel_m - keyframes[j].travel_m >= p.min_travel_m;
+    if (std::abs(apart) > p.submap_travel_m || !old_enough) continue;
+    if (j != old && keyframes[j].travel_m - last_taken < p.submap_step_m) continue;
+    last_taken = keyframes[j].travel_m;
+    const Pose2 T_old_j = T_old_map * SensorPose(keyframes, graph, j);
+    for (const Polyline& polyline : keyframes[j].shapes.fine) {
+      place.fine.push_back(Transform(T_old_j, polyline));
+    }
+  }
+  return place;
+}
+
+// Of the model samples (scan frame) that the scan could have seen -- within the bearings and
+// ranges of its own samples, not beyond what it saw in that direction -- the fraction within
+// inlier_distance_m of the scan's polylines. A place seen only partly by the scan is judged by
+// what the scan saw.
+double VisibleInlierRatio(const std::vector<Point2>& model_samples_scan,
+                          const std::vector<Point2>& scan_samples, const internal::SegmentGrid& scan_grid) {
+  constexpr int kBins = 720;  // half a degree
+  constexpr double kBehindM = 0.5;  // a model sample this much beyond the scan's reach is hidden
+  std::vector<double> reach(kBins, -1.0);
+  const auto bin = [](const Point2& p) {
+    const double a = std::atan2(p.y(), p.x());
+    return std::min(kBins - 1, static_cast<int>((a + M_PI) / (2.0 * M_PI) * kBins));
+  };
+  for (const Point2& q : scan_samples) reach[bin(q)] = std::max(reach[bin(q)], q.norm());
+  int seen = 0, explained = 0;
+  for (const Point2& q : model_samples_scan) {
+    const double r = reach[bin(q)];
+    if (r < 0.0 || q.norm() > r + kBehindM) continue;
+    ++seen;
+    explained += scan_grid.Nearest(q).segment >= 0 ? 1 : 0;
+  }
+  return seen == 0 ? 0.0 : static_cast<double>(explained) / seen;
+}
+
+// Shape matching (§4.2 with a guess, §4.3 without) of the new keyframe against the old place.
+std::optional<Pose2> ShapeCandidate(const ScanShapes& scan, const std::vector<Polyline>& model,
+                                    const std::optional<Pose2>& guess, const Pose2& estimate,
+                                    const ScanMatchParams& match) {
+  ShapeMatchInput input;
+  input.scan = scan.coarse;
+  input.scan_fine = scan.fine;
+  input.model = model;
+  input.model_cyclic = !guess;
+  ShapeMatcherParams matcher = match.matcher;
+  if (!guess) {
+    input.hint_estimates = {Pose2(), estimate};
+    // No map backs a closure up: as many seeds as scan-to-scan registration.
+    matcher.max_seed_pairs = match.seed_pairs;
+    matcher.num_seeds = match.seeds;
+  }
+  const ShapeMatchResult result = MatchShapes(input, guess, matcher);
+  if (result.matches.empty()) return std::nullopt;
+  return result.T_model_scan;
+}
+
+// Weighted adjacency of the pose graph: consecutive edges weigh the driving between their
+// keyframes, loop edges nothing (they tie the two places together).
+std::vector<std::vector<std::pair<int, double>>> Adjacency(const std::vector<LoopKeyframe>& keyframes,
+                                                           const PoseGraph& graph) {
+  std::vector<double> travel(graph.NumNodes(), 0.0);
+  for (const LoopKeyframe& kf : keyframes) travel.at(kf.node) = kf.travel_m;
+  std::vector<std::vector<std::pair<int, double>>> adjacency(graph.NumNodes());
+  for (const PoseGraphEdge& e : graph.Edges()) {
+    const double w = e.loop ? 0.0 : std::abs(travel[e.to] - travel[e.from]);
+    adjacency[e.from].emplace_back(e.to, w);
+    adjacency[e.to].emplace_back(e.from, w);
+  }
+  return adjacency;
+}
+
+}  // namespace
+
+void LoopClosureParams::Validate() const {
+  if (search_every < 1) throw std::invalid_argument("LoopClosureParams::search_every must be >= 1");
+  if (max_candidates < 1) throw std::invalid_argument("LoopClosureParams::max_candidates must be >= 1");
+  NonNegative(submap_travel_m, "LoopClosureParams::submap_travel_m");
+  NonNegative(submap_step_m, "LoopClosureParams::submap_step_m");
+  Positive(window_half_m, "LoopClosureParams::window_half_m");
+  Positive(window_resolution_m, "LoopClosureParams::window_resolution_m");
+  if (window_max_evaluations < 1) {
+    throw std::invalid_argument("LoopClosureParams::window_max_evaluations must be >= 1");
+  }
+  Positive(max_view_angle_rad, "LoopClosureParams::max_view_angle_rad");
+  Positive(max_match_sigma_m, "LoopClosureParams::max_match_sigma_m");
+  Fraction(strong_inlier_ratio, "LoopClosureParams::strong_inlier_ratio");
+  Positive(search_radius_m, "LoopClosureParams::search_radius_m");
+  NonNegative(search_radius_per_m, "LoopClosureParams::search_radius_per_m");
+  if (!(max_search_radius_m >= search_radius_m) || !std::isfinite(max_search_radius_m)) {
+    throw std::invalid_argument("LoopClosureParams::max_search_radius_m must be >= search_radius_m");
+  }
+  NonNegative(min_travel_m, "LoopClosureParams::min_travel_m");
+  Positive(covariance_scale, "LoopClosureParams::covariance_scale");
+  Positive(sigma_floor_m, "LoopClosureParams::sigma_floor_m");
+  Positive(sigma_floor_rad, "LoopClosureParams::sigma_floor_rad");
+  NonNegative(min_correction_m, "LoopClosureParams::min_correction_m");
+  NonNegative(min_correction_rad, "LoopClosureParams::min_correction_rad");
+  Positive(max_correction_rad, "LoopClosureParams::max_correction_rad");
+  NonNegative(max_correction_rad_per_m, "LoopClosureParams::max_correction_rad_per_m");
+  if (confirm_within_keyframes < 1) {
+    throw std::invalid_argument("LoopClosureParams::confirm_within_keyframes must be >= 1");
+  }
+  NonNegative(confirm_tolerance_m, "LoopClosureParams::confirm_tolerance_m");
+  NonNegative(confirm_tolerance_rad, "LoopClosureParams::confirm_tolerance_rad");
+  NonNegative(confirm_tolerance_per_m, "LoopClosureParams::confirm_tolerance_per_m");
+  NonNegative(confirm_tolerance_rad_per_m, "LoopClosureParams::confirm_tolerance_rad_per_m");
+  NonNegative(candidate_turn_weight_m_per_rad, "LoopClosureParams::candidate_turn_weight_m_per_rad");
+  NonNegative(candidate_spacing_m, "LoopClosureParams::candidate_spacing_m");
+  Positive(unconfirmed_sigma_m, "LoopClosureParams::unconfirmed_sigma_m");
+  Positive(unconfirmed_sigma_rad, "LoopClosureParams::unconfirmed_sigma_rad");
+  Positive(max_correction_m, "LoopClosureParams::max_correction_m");
+  NonNegative(max_correction_per_m, "LoopClosureParams::max_correction_per_m");
+  Fraction(min_inlier_ratio, "LoopClosureParams::min_inlier_ratio");
+  Fraction(min_reverse_inlier_ratio, "LoopClosureParams::min_reverse_inlier_ratio");
+  graph.Validate();
+}
+
+Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosureParams& params) {
+  Eigen::Matrix3d c = params.covariance_scale * refined;
+  c = 0.5 * (c + c.transpose()).eval();
+  const double fm = params.sigma_floor_m * params.sigma_floor_m;
+  const double fr = params.sigma_floor_rad * params.sigma_floor_rad;
+  c(0, 0) = std::max(c(0, 0), fm);
+  c(1, 1) = std::max(c(1, 1), fm);
+  c(2, 2) = std::max(c(2, 2), fr);
+  // Keep it positive definite whatever the refinement reported.
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(c);
+  if (eig.eigenvalues().minCoeff() <= 1e-12) c += Eigen::Vector3d(fm, fm, fr).asDiagonal();
+  return c;
+}
+
+LoopCloser::LoopCloser(const LoopClosureParams& params, const ScanMatchParams& match)
+    : params_(params), match_(match) {
+  params_.Validate();
+  match_.Validate();
+}
+
+double LoopCloser::SearchRadius(double graph_distance_m) const {
+  return std::min(params_.max_search_radius_m,
+                  params_.search_radius_m + params_.search_radius_per_m * graph_distance_m);
+}
+
+double LoopCloser::CorrectionBoundM(double graph_distance_m) const {
+  return std::min(SearchRadius(graph_distance_m),
+                  std::max(params_.max_correction_m, params_.max_correction_per_m * graph_distance_m));
+}
+
+double LoopCloser::CorrectionBoundRad(double graph_distance_m) const {
+  return std::min(M_PI, params_.max_correction_rad + params_.max_correction_rad_per_m * graph_distance_m);
+}
+
+// Dijkstra from keyframe `from` over the graph (see Adjacency): the driving that separates each
+// keyframe from it once the closed loops are taken into account, a proxy for the uncertainty of
+// their relative pose. Indexed by keyframe.
+std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& keyframes,
+                                               const PoseGraph& graph, int from) const {
+  const auto adjacency = Adjacency(keyframes, graph);
+  std::vector<double> node_distance(graph.NumNodes(), std::numeric_limits<double>::infinity());
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
+  node_distance.at(keyframes[from].node) = 0.0;
+  queue.emplace(0.0, keyframes[from].node);
+  while (!queue.empty()) {
+    const auto [d, n] = queue.top();
+    queue.pop();
+    if (d > node_distance[n]) continue;
+    for (const auto& [m, w] : adjacency[n]) {
+      if (d + w < node_distance[m]) {
+        node_distance[m] = d + w;
+        queue.emplace(d + w, m);
+      }
+    }
+  }
+  std::vector<double> distance(keyframes.size());
+  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+    const double d = node_distance[keyframes[k].node];
+    // A keyframe the graph does not connect: its uncertainty is the driving between them.
+    distance[k] = std::isfinite(d) ? d : std::abs(keyframes[from].travel_m - keyframes[k].travel_m);
+  }
+  return distance;
+}
+
+// Old keyframes at least min_travel_m of driving back, within the search region of the current
+// estimate (which grows with the graph distance) and seen from a similar heading (within the
+// heading uncertainty: a 180 deg scanner's view from the opposite direction shares little),
+// ordered by distance plus heading difference relative to their search radius, spread along
+// the old path.
+std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyframes,
+                                        const PoseGraph& graph) const {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  if (current < 1) return {};
+  const std::vector<double> graph_distance = GraphDistances(keyframes, graph, current);
+  const Pose2 P_now = graph.Node(keyframes[current].node);
+  std::vector<std::pair<double, int>> scored;
+  for (int k = 0; k < current; ++k) {
+    if (keyframes[current].travel_m - keyframes[k].travel_m < params_.min_travel_m) break;
+    const Pose2 P = graph.Node(keyframes[k].node);
+    const double g = graph_distance[k];
+    const double radius = SearchRadius(g);
+    const double d = (P.Translation() - P_now.Translation()).norm();
+    const double turn = std::abs(NormalizeAngle(P.theta - P_now.theta));
+    const double view = std::min(M_PI, params_.max_view_angle_rad + params_.max_correction_rad_per_m * g);
+    if (d <= radius && turn <= view) {
+      scored.emplace_back((d + params_.candidate_turn_weight_m_per_rad * turn) / radius, k);
+    }
+  }
+  std::sort(scored.begin(), scored.end());
+  std::vector<int> places;
+  for (const auto& [score, k] : scored) {
+    // Neighbouring keyframes see nearly the same: spread the tries along the old path.
+    const bool near_tried = std::any_of(places.begin(), places.end(), [&, k = k](int c) {
+      return std::abs(keyframes[c].travel_m - keyframes[k].travel_m) < params_.candidate_spacing_m;
+    });
+    if (!near_tried) places.push_back(k);
+  }
+  // The best-ranked place, then the others in turn from search to search.
+  std::vector<int> candidates;
+  if (places.empty()) return candidates;
+  candidates.push_back(places[0]);
+  const int others = static_cast<int>(places.size()) - 1;
+  for (int j = 0; j < std::min(others, params_.max_candidates - 1); ++j) {
+    candidates.push_back(places[1 + (round_robin_ + j) % others]);
+  }
+  round_robin_ += std::max(1, params_.max_candidates - 1);
+  return candidates;
+}
+
+std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& keyframes,
+                                             const PoseGraph& graph, int old) const {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  if (old < 0 || old >= current) return std::nullopt;
+  const LoopKeyframe& now = keyframes[current];
+  const LoopKeyframe& then = keyframes[old];
+  if (now.shapes.coarse.empty() || then.shapes.coarse.empty()) return std::nullopt;
+  const double graph_distance = GraphDistances(keyframes, graph, current)[old];
+  const Place place = OldPlace(keyframes, graph, old, params_);
+  const double spacing = match_.matcher.alignment.sample_spacing_m;
+  const std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
+  const std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
+  if (samples.empty() || place_samples.empty()) return std::nullopt;
+
+  // Candidates: the estimate, the shape match with it as guess and the one without (§4.3), and
+  // the window search's best poses over the whole place.
+  const Pose2 estimate = SensorPose(keyframes, graph, old).Inverse() * SensorPose(keyframes, graph, current);
+  std::vector<Pose2> candidates = {estimate};
+  for (const std::optional<Pose2>& guess : {std::optional<Pose2>(estimate), std::optional<Pose2>()}) {
+    if (auto c = ShapeCandidate(now.shapes, place.coarse, guess, estimate, match_)) candidates.push_back(*c);
+  }
+  const double bound_m = CorrectionBoundM(graph_distance);
+  WindowSearchParams window = match_.window_search;
+  window.resolution_m = params_.window_resolution_m;
+  window.hit_sigma_m = params_.window_resolution_m;
+  window.half_window_m = std::min(bound_m, params_.window_half_m);
+  window.half_window_rad = CorrectionBoundRad(graph_distance);
+  window.max_node_evaluations = params_.window_max_evaluations;
+  const Pose2 centre = bound_m <= params_.window_half_m ? estimate : Pose2(0.0, 0.0, estimate.theta);
+  const WindowSearch search(place.fine, window);
+  const std::vector<Point2> coarse_samples =
+      internal::Thinned(samples, spacing, match_.window_search_spacing_m);
+  for (const WindowHypothesis& h : search.Search(coarse_samples, centre)) {
+    candidates.push_back(h.T_model_scan);
+  }
+  CandidateSelectionParams selection = match_.selection;
+  selection.capture_distance_m = match_.coarse_gate_m;
+  selection.inlier_distance_m = match_.matcher.inlier_distance_m;
+  const CandidateSelector selector(place.fine, selection);
+  // Among fits that explain the scan about equally well the one nearest the estimate wins:
+  // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
+  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    RefinementResult refined = internal::RefineAgainstMap(samples, place.fine, c.T_model_scan,
+                                                          std::nullopt, match_.refinement,
+                                                          match_.coarse_gate_m);
+    if (!refined.converged) return std::nullopt;
+    return refined;
+  };
+  const auto selected = SelectRefined<RefinementResult>(selector.Rank(samples, candidates, estimate),
+                                                        selection.max_refinements, refine);
+  if (!selected) return std::nullopt;
+  const RefinementResult& refined = selected->second;
+
+  // Verification: both sides explain each other ...
+  LoopClosure loop;
+  loop.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
+  const internal::SegmentGrid scan_grid(internal::MakeModelSegments(now.shapes.fine),
+                                        match_.matcher.inlier_distance_m);
+  std::vector<Point2> place_in_scan;
+  const PointTransform T_scan_old(refined.T_map_scan.Inverse());
+  for (const Point2& q : place_samples) place_in_scan.push_back(T_scan_old(q));
+  loop.reverse_inlier_ratio = VisibleInlierRatio(place_in_scan, samples, scan_grid);
+  if (loop.inlier_ratio < params_.min_inlier_ratio ||
+      loop.reverse_inlier_ratio < params_.min_reverse_inlier_ratio) {
+    return std::nullopt;
+  }
+  // ... the match constrains every direction (not along a featureless corridor) ...
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(refined.covariance.topLeftCorner<2, 2>());
+  if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > params_.max_match_sigma_m) {
+    return std::nullopt;
+  }
+  // ... and the correction lies within the uncertainty (drift is bounded; a corridor turned
+  // by 180 deg, a parallel corridor far off are not).
+  const Pose2 T_old_now = graph.Node(then.node).Inverse() * graph.Node(now.node);
+  loop.edge = {then.node, now.node,
+               then.T_robot_sensor * refined.T_map_scan * now.T_robot_sensor.Inverse(),
+               EdgeCovariance(refined.covariance, params_), true};
+  loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
+  loop.old_keyframe = old;
+  loop.new_keyframe = current;
+  loop.graph_distance_m = graph_distance;
+  if (std::abs(loop.correction.theta) > CorrectionBoundRad(graph_distance) ||
+      loop.correction.Translation().norm() > CorrectionBoundM(graph_distance)) {
+    return std::nullopt;
+  }
+  return loop;
+}
+
+// The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the
+// graph puts ob relative to oa. The two chains along the graph (oa..ob, ka..kb) carry the
+// drift, so the tolerance grows with their length.
+bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
+                            const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const {
+  const auto node = [&](int k) { return graph.Node(keyframes[k].node); };
+  const Pose2 T_oa_ob = node(a.old_keyframe).Inverse() * node(b.old_keyframe);
+  const Pose2 T_ka_kb = node(a.new_keyframe).Inverse() * node(b.new_keyframe);
+  const Pose2 error = T_oa_ob.Inverse() * a.edge.T_from_to * T_ka_kb * b.edge.T_from_to.Inverse();
+  const std::vector<double> from_old = GraphDistances(keyframes, graph, a.old_keyframe);
+  const std::vector<double> from_new = GraphDistances(keyframes, graph, a.new_keyframe);
+  const double chains = from_old[b.old_keyframe] + from_new[b.new_keyframe];
+  return error.Translation().norm() <= params_.confirm_tolerance_m + params_.confirm_tolerance_per_m * chains &&
+         std::abs(error.theta) <= params_.confirm_tolerance_rad + params_.confirm_tolerance_rad_per_m * chains;
+}
+
+bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  if (!params_.enabled || current < 1 || current % params_.search_every != 0) return false;
+  ++num_searches_;
+  pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
+                                [&](const LoopClosure& p) {
+                                  return current - p.new_keyframe > params_.confirm_within_keyframes;
+                                }),
+                 pending_.end());
+  std::optional<LoopClosure> loop;
+  for (const int old : Candidates(keyframes, graph)) {
+    std::optional<LoopClosure> candidate = Match(keyframes, graph, old);
+    if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = candidate;
+  }
+  if (!loop) return false;
+  ++num_found_;
+  const Pose2& c = loop->correction;
+  const double moved = c.Translation().norm();
+  if (moved <= params_.min_correction_m && std::abs(c.theta) <= params_.min_correction_rad) {
+    graph.AddEdge(loop->edge);  // agrees with the graph: one more constraint, nothing to correct
+    ++num_accepted_;
+    return false;
+  }
+  const bool strong = loop->inlier_ratio >= params_.strong_inlier_ratio &&
+                      loop->reverse_inlier_ratio >= params_.strong_inlier_ratio &&
+                      moved <= params_.max_correction_m && std::abs(c.theta) <= params_.max_correction_rad;
+  std::vector<LoopClosure> accepted;
+  if (!strong) {
+    // A single match must not bend the map: wait for one that agrees with it.
+    for (const LoopClosure& p : pending_) {
+      if (Consistent(p, *loop, keyframes, graph)) accepted.push_back(p);
+    }
+    if (accepted.empty()) {
+      pending_.push_back(*loop);
+      return false;
+    }
+  }
+  accepted.push_back(*loop);
+  for (const LoopClosure& a : accepted) graph.AddEdge(a.edge);
+  num_accepted_ += static_cast<int>(accepted.size());
+  pending_.clear();
+  return true;
+}
+
+}  // namespace shape_slam
