@@ -25,13 +25,16 @@ struct PoseGraphEdge {
 struct PoseGraphParams {
   /// Scale of the Cauchy loss on loop edges, in standard deviations (of the edge covariance).
   double loop_loss_scale = 3.0;
+  /// Graduated: the graph is first solved with this wider scale (when larger), so that the
+  /// loops closing a large drift pull it most of the way, then with loop_loss_scale.
+  double initial_loop_loss_scale = 100.0;
   int max_iterations = 50;
   void Validate() const;
 };
 
 struct PoseGraphResult {
   bool converged = false;
-  int iterations = 0;
+  int iterations = 0;            ///< over both stages
   double initial_cost = 0.0;
   double final_cost = 0.0;
 };

@@ -12,6 +12,7 @@
 
 #include "shape_slam/candidate_selection.h"
 #include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/validation.h"
 #include "shape_slam/internal/model_segments.h"
 #include "shape_slam/shape_matcher.h"
 #include "shape_slam/window_search.h"
@@ -19,17 +20,9 @@
 namespace shape_slam {
 namespace {
 
-void Positive(double value, const std::string& name) {
-  if (!(value > 0.0) || !std::isfinite(value)) throw std::invalid_argument(name + " must be > 0");
-}
-
-void NonNegative(double value, const std::string& name) {
-  if (!(value >= 0.0) || !std::isfinite(value)) throw std::invalid_argument(name + " must be >= 0");
-}
-
-void Fraction(double value, const std::string& name) {
-  if (!(value >= 0.0 && value <= 1.0)) throw std::invalid_argument(name + " must be in [0, 1]");
-}
+using internal::NonNegative;
+using internal::Positive;
+using internal::Fraction;
 
 Pose2 SensorPose(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph, int k) {
   return graph.Node(keyframes[k].node) * keyframes[k].T_robot_sensor;
@@ -138,6 +131,7 @@ void LoopClosureParams::Validate() const {
     throw std::invalid_argument("LoopClosureParams::window_max_evaluations must be >= 1");
   }
   Positive(max_view_angle_rad, "LoopClosureParams::max_view_angle_rad");
+  NonNegative(view_angle_per_m, "LoopClosureParams::view_angle_per_m");
   Positive(max_match_sigma_m, "LoopClosureParams::max_match_sigma_m");
   Fraction(strong_inlier_ratio, "LoopClosureParams::strong_inlier_ratio");
   Positive(search_radius_m, "LoopClosureParams::search_radius_m");
@@ -167,6 +161,9 @@ void LoopClosureParams::Validate() const {
   Positive(max_correction_m, "LoopClosureParams::max_correction_m");
   NonNegative(max_correction_per_m, "LoopClosureParams::max_correction_per_m");
   Fraction(min_inlier_ratio, "LoopClosureParams::min_inlier_ratio");
+  Positive(verify_tolerance_m, "LoopClosureParams::verify_tolerance_m");
+  Positive(verify_tolerance_rad, "LoopClosureParams::verify_tolerance_rad");
+  Fraction(max_broken_fraction, "LoopClosureParams::max_broken_fraction");
   Fraction(min_reverse_inlier_ratio, "LoopClosureParams::min_reverse_inlier_ratio");
   graph.Validate();
 }
@@ -255,7 +252,7 @@ std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyfram
     const double radius = SearchRadius(g);
     const double d = (P.Translation() - P_now.Translation()).norm();
     const double turn = std::abs(NormalizeAngle(P.theta - P_now.theta));
-    const double view = std::min(M_PI, params_.max_view_angle_rad + params_.max_correction_rad_per_m * g);
+    const double view = std::min(M_PI, params_.max_view_angle_rad + params_.view_angle_per_m * g);
     if (d <= radius && turn <= view) {
       scored.emplace_back((d + params_.candidate_turn_weight_m_per_rad * turn) / radius, k);
     }
@@ -331,7 +328,6 @@ std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& ke
   };
   const auto selected = SelectRefined<RefinementResult>(selector.Rank(samples, candidates, estimate),
                                                         selection.max_refinements, refine);
-  if (!selected) return std::nullopt;
   const RefinementResult& refined = selected->second;
 
   // Verification: both sides explain each other ...
@@ -423,6 +419,27 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
     }
   }
   accepted.push_back(*loop);
+  // The closures already in the graph vote on the new ones: the graph optimised with them must
+  // still agree with the earlier loop edges it agreed with (a wrong pair of consistent
+  // closures bends the graph away from them).
+  PoseGraph trial = graph;
+  for (const LoopClosure& a : accepted) trial.AddEdge(a.edge);
+  trial.Optimize(params_.graph);
+  int broken = 0, kept = 0;
+  const auto agrees = [&](const PoseGraph& g, const PoseGraphEdge& e) {
+    const Pose2 error = e.T_from_to.Inverse() * (g.Node(e.from).Inverse() * g.Node(e.to));
+    return error.Translation().norm() <= params_.verify_tolerance_m &&
+           std::abs(error.theta) <= params_.verify_tolerance_rad;
+  };
+  for (const PoseGraphEdge& e : graph.Edges()) {
+    if (!e.loop || !agrees(graph, e)) continue;
+    (agrees(trial, e) ? kept : broken) += 1;
+  }
+  if (broken > params_.max_broken_fraction * (broken + kept)) {
+    ++num_rejected_;
+    pending_.clear();
+    return false;
+  }
   for (const LoopClosure& a : accepted) graph.AddEdge(a.edge);
   num_accepted_ += static_cast<int>(accepted.size());
   pending_.clear();

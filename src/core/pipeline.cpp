@@ -8,18 +8,14 @@
 
 #include "shape_slam/alignment.h"
 #include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/validation.h"
 #include "shape_slam/internal/model_icp.h"
 
 namespace shape_slam {
 namespace {
 
-void Positive(double value, const std::string& name) {
-  if (!(value > 0.0) || !std::isfinite(value)) throw std::invalid_argument(name + " must be > 0");
-}
-
-void NonNegative(double value, const std::string& name) {
-  if (!(value >= 0.0) || !std::isfinite(value)) throw std::invalid_argument(name + " must be >= 0");
-}
+using internal::NonNegative;
+using internal::Positive;
 
 void ValidateScan(const LaserScan& scan) {
   if (scan.ranges_m.size() != scan.angles_rad.size()) {

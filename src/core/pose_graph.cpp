@@ -31,6 +31,9 @@ void PoseGraphParams::Validate() const {
   if (!(loop_loss_scale > 0.0) || !std::isfinite(loop_loss_scale)) {
     throw std::invalid_argument("PoseGraphParams::loop_loss_scale must be > 0");
   }
+  if (!(initial_loop_loss_scale >= 0.0) || !std::isfinite(initial_loop_loss_scale)) {
+    throw std::invalid_argument("PoseGraphParams::initial_loop_loss_scale must be >= 0");
+  }
   if (max_iterations < 1) throw std::invalid_argument("PoseGraphParams::max_iterations must be >= 1");
 }
 
@@ -60,30 +63,41 @@ PoseGraphResult PoseGraph::Optimize(const PoseGraphParams& params) {
   }
   std::vector<std::array<double, 3>> x(poses_.size());
   for (std::size_t i = 0; i < poses_.size(); ++i) x[i] = {poses_[i].x, poses_[i].y, poses_[i].theta};
-  ceres::Problem::Options problem_options;
-  ceres::Problem problem(problem_options);
-  for (const PoseGraphEdge& e : edges_) {
-    ceres::LossFunction* loss = e.loop ? new ceres::CauchyLoss(params.loop_loss_scale) : nullptr;
-    problem.AddResidualBlock(
-        internal::RelativePoseCost::Create(e.T_from_to, SqrtInformation(e.covariance)), loss,
-        x[e.from].data(), x[e.to].data());
-  }
-  problem.AddParameterBlock(x[0].data(), 3);  // node 0 may have no edge of its own
-  problem.SetParameterBlockConstant(x[0].data());
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
-  options.max_num_iterations = params.max_iterations;
-  options.num_threads = 1;
-  options.logging_type = ceres::SILENT;
-  options.minimizer_progress_to_stdout = false;
+  // Graduated: a wide loss first, so that loop edges far from the estimate (the drift around a
+  // large loop) pull the graph most of the way, then the robust one, so that a wrong closure
+  // that slipped through stays down-weighted.
+  std::vector<double> scales;
+  if (params.initial_loop_loss_scale > params.loop_loss_scale) scales.push_back(params.initial_loop_loss_scale);
+  scales.push_back(params.loop_loss_scale);
   ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
+  bool first = true;
+  for (const double scale : scales) {
+    ceres::Problem problem;
+    for (const PoseGraphEdge& e : edges_) {
+      ceres::LossFunction* loss = e.loop ? new ceres::CauchyLoss(scale) : nullptr;
+      problem.AddResidualBlock(
+          internal::RelativePoseCost::Create(e.T_from_to, SqrtInformation(e.covariance)), loss,
+          x[e.from].data(), x[e.to].data());
+    }
+    problem.AddParameterBlock(x[0].data(), 3);  // node 0 may have no edge of its own
+    problem.SetParameterBlockConstant(x[0].data());
+    ceres::Solver::Options options;
+    options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    options.max_num_iterations = params.max_iterations;
+    options.num_threads = 1;
+    options.logging_type = ceres::SILENT;
+    options.minimizer_progress_to_stdout = false;
+    ceres::Solver::Summary stage;
+    ceres::Solve(options, &problem, &stage);
+    if (first) result.initial_cost = stage.initial_cost;
+    first = false;
+    result.iterations += static_cast<int>(stage.iterations.size());
+    summary = stage;
+  }
   for (std::size_t i = 0; i < poses_.size(); ++i) {
     poses_[i] = Pose2(x[i][0], x[i][1], NormalizeAngle(x[i][2]));
   }
   result.converged = summary.termination_type == ceres::CONVERGENCE;
-  result.iterations = static_cast<int>(summary.iterations.size());
-  result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;
   return result;
 }

@@ -1,0 +1,218 @@
+// Loop closure (loop_closure.h) on simulated keyframe graphs: a robot drives through a building,
+// one scan per metre; the graph's consecutive edges carry a growing heading drift (as a badly
+// calibrated odometry or a biased scan matcher would), so the estimate is metres off when the
+// robot returns. Loops must close and the optimised graph must be right (a large loop, a figure
+// eight); in a building that is symmetric under a half turn (two identical parallel corridors)
+// no closure may join the wrong corridor.
+#include "shape_slam/loop_closure.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "shape_slam/pipeline.h"
+#include "test_scenes.h"
+
+namespace shape_slam {
+namespace {
+
+using testing::Scene;
+
+// A rectangular ring corridor: the outer walls [x0, x1] x [y0, y1], a block inside `width` from
+// them.
+Scene RingCorridor(double x0, double y0, double x1, double y1, double width) {
+  Scene s = testing::Room(x0, y0, x1, y1);
+  const Scene block = testing::Room(x0 + width, y0 + width, x1 - width, y1 - width);
+  s.insert(s.end(), block.begin(), block.end());
+  return s;
+}
+
+// A box 1 m wide standing `depth` out of the wall y = y_wall (into +y when depth > 0), from x.
+void AddBumpX(Scene& s, double x, double y_wall, double depth) {
+  s.push_back({{x, y_wall}, {x, y_wall + depth}});
+  s.push_back({{x, y_wall + depth}, {x + 1.0, y_wall + depth}});
+  s.push_back({{x + 1.0, y_wall + depth}, {x + 1.0, y_wall}});
+}
+
+// The same out of the wall x = x_wall (into +x when depth > 0), from y.
+void AddBumpY(Scene& s, double y, double x_wall, double depth) {
+  s.push_back({{x_wall, y}, {x_wall + depth, y}});
+  s.push_back({{x_wall + depth, y}, {x_wall + depth, y + 1.0}});
+  s.push_back({{x_wall + depth, y + 1.0}, {x_wall, y + 1.0}});
+}
+
+struct Drive {
+  std::vector<Pose2> truth;     // robot poses, one per metre
+  std::vector<Pose2> estimate;  // composed from the drifting relative motions
+  std::vector<Pose2> measured;  // the drifting relative motion to each pose from the previous
+};
+
+// Poses every `step` metres along the waypoints (heading along each leg); the measured motion
+// turns `drift_rad_per_m` too far per metre driven, plus a little noise.
+Drive DriveAlong(const std::vector<Point2>& waypoints, double step, double drift_rad_per_m,
+                 unsigned seed) {
+  std::mt19937 prng(seed);
+  std::normal_distribution<double> noise(0.0, 1.0);
+  Drive d;
+  for (std::size_t w = 0; w + 1 < waypoints.size(); ++w) {
+    const Point2 a = waypoints[w], b = waypoints[w + 1];
+    const double heading = std::atan2(b.y() - a.y(), b.x() - a.x());
+    const int n = std::max(1, static_cast<int>(std::lround((b - a).norm() / step)));
+    for (int k = (w == 0 ? 0 : 1); k <= n; ++k) {
+      const Point2 p = a + (b - a) * (static_cast<double>(k) / n);
+      d.truth.emplace_back(p.x(), p.y(), heading);
+    }
+  }
+  d.estimate.push_back(d.truth[0]);
+  d.measured.emplace_back();
+  for (std::size_t i = 1; i < d.truth.size(); ++i) {
+    const Pose2 rel = d.truth[i - 1].Inverse() * d.truth[i];
+    const double moved = rel.Translation().norm();
+    const Pose2 m(rel.x + 0.005 * noise(prng), rel.y + 0.005 * noise(prng),
+                  rel.theta + drift_rad_per_m * moved + 0.001 * noise(prng));
+    d.measured.push_back(m);
+    d.estimate.push_back(d.estimate.back() * m);
+  }
+  return d;
+}
+
+double PositionRmse(const std::vector<Pose2>& a, const std::vector<Pose2>& b) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < a.size(); ++i) sum += (a[i].Translation() - b[i].Translation()).squaredNorm();
+  return std::sqrt(sum / a.size());
+}
+
+struct Result {
+  int closures = 0;
+  double rmse_before = 0.0;
+  double rmse_after = 0.0;
+  PoseGraph graph;
+  std::vector<Pose2> truth;
+};
+
+// Feeds the drive to a LoopCloser keyframe by keyframe, optimising whenever it asks and once
+// at the end, as the mapper does.
+Result CloseLoops(const Scene& world, const Drive& drive, unsigned seed) {
+  const ShapeSlamParams params;
+  LoopCloser closer(params.loop_closure, ToScanMatchParams(params));
+  std::mt19937 prng(seed);
+  std::vector<LoopKeyframe> keyframes;
+  Result r;
+  double travel = 0.0;
+  for (std::size_t i = 0; i < drive.truth.size(); ++i) {
+    const LaserScan scan = testing::SimulateScan(world, drive.truth[i], testing::ScannerModel{}, prng);
+    const int node = r.graph.AddNode(i == 0 ? drive.truth[0] : r.graph.Node(static_cast<int>(i) - 1) * drive.measured[i]);
+    if (i > 0) {
+      travel += drive.measured[i].Translation().norm();
+      PoseGraphEdge e;
+      e.from = node - 1;
+      e.to = node;
+      e.T_from_to = drive.measured[i];
+      e.covariance = Eigen::Vector3d(0.02 * 0.02, 0.02 * 0.02, 0.01 * 0.01).asDiagonal();
+      r.graph.AddEdge(e);
+    }
+    keyframes.push_back({node, ExtractScanShapes(scan, params.shapes), Pose2(), travel});
+    if (closer.Update(keyframes, r.graph)) r.graph.Optimize(params.loop_closure.graph);
+  }
+  r.rmse_before = PositionRmse(drive.estimate, drive.truth);
+  r.graph.Optimize(params.loop_closure.graph);
+  std::vector<Pose2> optimised;
+  for (int n = 0; n < r.graph.NumNodes(); ++n) optimised.push_back(r.graph.Node(n));
+  r.rmse_after = PositionRmse(optimised, drive.truth);
+  r.closures = closer.NumLoopClosures();
+  r.truth = drive.truth;
+  return r;
+}
+
+// Every accepted loop edge agrees with the true relative pose.
+void ExpectLoopEdgesRight(const Result& r) {
+  for (const PoseGraphEdge& e : r.graph.Edges()) {
+    if (!e.loop) continue;
+    const Pose2 truth = r.truth[e.from].Inverse() * r.truth[e.to];
+    const Pose2 error = truth.Inverse() * e.T_from_to;
+    EXPECT_LT(error.Translation().norm(), 0.3) << "loop edge " << e.from << " -> " << e.to;
+    EXPECT_LT(std::abs(error.theta), 0.05) << "loop edge " << e.from << " -> " << e.to;
+  }
+}
+
+// A 40 x 24 m ring corridor driven once around and on for half a side: the heading drift
+// (0.25 deg per metre, 32 deg around the loop) puts the estimate metres off the start.
+TEST(LoopClosureTest, ClosesALargeLoopWithGrowingDrift) {
+  Scene world = RingCorridor(0.0, 0.0, 40.0, 24.0, 3.0);
+  AddBumpX(world, 7.0, 0.0, 0.6);
+  AddBumpX(world, 18.5, 0.0, 0.4);
+  AddBumpX(world, 31.0, 24.0, -0.5);
+  AddBumpX(world, 12.0, 24.0, -0.7);
+  AddBumpY(world, 9.0, 40.0, -0.5);
+  AddBumpY(world, 15.0, 0.0, 0.6);
+  const std::vector<Point2> path = {{1.5, 1.5}, {38.5, 1.5}, {38.5, 22.5}, {1.5, 22.5},
+                                    {1.5, 1.5}, {22.0, 1.5}};
+  const Drive drive = DriveAlong(path, 1.0, 0.25 * M_PI / 180.0, 1);
+  const Result r = CloseLoops(world, drive, 2);
+  EXPECT_GT(r.rmse_before, 3.0);                  // the drift is large ...
+  EXPECT_GE(r.closures, 2);                       // ... the loop closes ...
+  EXPECT_LT(r.rmse_after, 0.2 * r.rmse_before);   // ... and most of the drift is gone
+  EXPECT_LT(r.rmse_after, 1.0) << "before " << r.rmse_before;
+  ExpectLoopEdgesRight(r);
+}
+
+// Two ring corridors side by side sharing the middle one, driven as a figure eight: the middle
+// corridor twice, in opposite directions.
+TEST(LoopClosureTest, ClosesAFigureEight) {
+  Scene world = testing::Room(0.0, 0.0, 44.0, 22.0);
+  for (const Scene& block : {testing::Room(3.0, 3.0, 20.0, 19.0), testing::Room(24.0, 3.0, 41.0, 19.0)}) {
+    world.insert(world.end(), block.begin(), block.end());
+  }
+  AddBumpX(world, 6.0, 0.0, 0.5);
+  AddBumpX(world, 33.0, 0.0, 0.6);
+  AddBumpX(world, 12.0, 22.0, -0.5);
+  AddBumpX(world, 28.5, 22.0, -0.6);
+  AddBumpY(world, 8.0, 0.0, 0.5);
+  AddBumpY(world, 13.0, 44.0, -0.5);
+  AddBumpY(world, 6.0, 20.0, 0.4);   // in the middle corridor
+  AddBumpY(world, 14.0, 24.0, -0.4);
+  const std::vector<Point2> path = {{22.0, 1.5},  {22.0, 20.5}, {42.5, 20.5}, {42.5, 1.5},
+                                    {22.0, 1.5},  {1.5, 1.5},   {1.5, 20.5},  {22.0, 20.5},
+                                    {22.0, 1.5},  {32.0, 1.5}};
+  const Drive drive = DriveAlong(path, 1.0, 0.2 * M_PI / 180.0, 3);
+  const Result r = CloseLoops(world, drive, 4);
+  EXPECT_GT(r.rmse_before, 3.0);
+  EXPECT_GE(r.closures, 2);
+  EXPECT_LT(r.rmse_after, 0.2 * r.rmse_before);
+  EXPECT_LT(r.rmse_after, 1.2) << "before " << r.rmse_before;
+  ExpectLoopEdgesRight(r);
+}
+
+// Two identical parallel corridors (the building looks the same turned by half a turn about
+// its centre), joined at both ends, driven twice around with little drift: the way back along
+// the second corridor looks exactly like the first one driven the other way. Closures must
+// join each corridor to itself, never to its twin.
+TEST(LoopClosureTest, DoesNotJoinLookAlikeParallelCorridors) {
+  Scene world = RingCorridor(0.0, 0.0, 36.0, 11.0, 3.0);
+  // Boxes placed symmetrically under the half turn about (18, 5.5).
+  for (const double x : {6.0, 14.0, 25.5}) {
+    AddBumpX(world, x, 0.0, 0.5);
+    AddBumpX(world, 36.0 - x - 1.0, 11.0, -0.5);
+  }
+  const std::vector<Point2> path = {{1.5, 1.5}, {34.5, 1.5}, {34.5, 9.5}, {1.5, 9.5},
+                                    {1.5, 1.5}, {34.5, 1.5}, {34.5, 9.5}, {1.5, 9.5}};
+  const Drive drive = DriveAlong(path, 1.0, 0.05 * M_PI / 180.0, 5);
+  const Result r = CloseLoops(world, drive, 6);
+  EXPECT_GE(r.closures, 2);
+  ExpectLoopEdgesRight(r);
+  EXPECT_LT(r.rmse_after, 0.3) << "before " << r.rmse_before;
+}
+
+TEST(LoopClosureTest, InvalidParametersAreRejected) {
+  const ShapeSlamParams params;
+  LoopClosureParams bad = params.loop_closure;
+  bad.max_search_radius_m = bad.search_radius_m - 1.0;
+  EXPECT_THROW(LoopCloser(bad, ToScanMatchParams(params)), std::invalid_argument);
+  bad = params.loop_closure;
+  bad.submap_step_m = -1.0;
+  EXPECT_THROW(LoopCloser(bad, ToScanMatchParams(params)), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shape_slam
