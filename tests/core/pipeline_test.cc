@@ -101,6 +101,22 @@ TEST(PipelineTest, MapsTheLoopWithOdometry) {
   EXPECT_LT(outcome.vertices, 400u);
 }
 
+// The final optimisation: the loop closes, Finish keeps the trajectory right and the map made
+// of the keyframes at their corrected poses; processing may go on after it.
+TEST(PipelineTest, FinishOptimisesAndRebuildsTheMap) {
+  const SimRun run = Simulate(5);
+  ShapeSlam slam;
+  for (const LaserScan& scan : run.scans) slam.Process(scan);
+  ASSERT_GT(slam.NumLoopClosures(), 0);
+  const std::size_t loops = slam.Graph().Edges().size();
+  slam.Finish();
+  EXPECT_EQ(slam.Graph().Edges().size(), loops);  // no new edge, only optimised
+  EXPECT_LT(EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m, 0.05);
+  EXPECT_GT(slam.Map().NumPolylines(), 5u);
+  const ScanReport more = slam.Process(run.scans.back());
+  EXPECT_TRUE(more.matched);
+}
+
 TEST(PipelineTest, IsDeterministic) {
   const SimRun run = Simulate(2);
   const Outcome a = Map(run, ShapeSlamParams{});
