@@ -19,9 +19,7 @@
 #include <iosfwd>
 #include <string>
 
-#include "shape_slam/map_update.h"
-#include "shape_slam/polyline_extraction.h"
-#include "shape_slam/visibility.h"
+#include "shape_slam/scan_insertion.h"
 
 namespace mrpt::config {
 class CConfigFileBase;
@@ -39,22 +37,12 @@ struct CreationOptions {
   void Validate() const;
 };
 
-/// [..._insertOpts]: how a CObservation2DRangeScan becomes polylines and updates the map, as in
-/// the pipeline (pipeline.h): extraction (§3.1), the light DCE of the alignment polylines, the
-/// visible map shape at the scan's pose (for the contradiction rule) and the map update (§5.2).
-struct InsertionOptions {
-  ExtractionParams extraction;
-  /// ScanShapesParams::alignment_dce_threshold_m, metres.
-  double alignment_dce_threshold_m = 0.005;
-  /// ScanShapesParams::alignment_max_deviation_m, metres.
-  double alignment_max_deviation_m = 0.02;
-  /// The visible map shape; max_range_m is cut to the scan's farthest reading + 1 m, fov_rad is
-  /// the scan's field of view widened by visibility_fov_margin_rad on each side.
-  VisibilityParams visibility;
-  double visibility_fov_margin_rad = 0.35;  ///< radians
-  MapUpdateParams map_update;
-  void Validate() const;
-};
+/// [..._insertOpts]: how a CObservation2DRangeScan becomes polylines and updates the map: the
+/// core's scan insertion (scan_insertion.h), the step the mapper takes for a keyframe, so a map
+/// built here from scans at given poses is the one the mapper builds from them at those poses.
+/// Keys: ExtractionParams fields, alignment_dce_threshold_m and alignment_max_deviation_m
+/// (ScanShapesParams), visibility_* (VisibilityParams) and MapUpdateParams fields.
+using InsertionOptions = ScanInsertionParams;
 
 /// [..._likelihoodOpts]: a likelihood field on the polylines (as MRPT's LF model for grids):
 /// every `decimation`-th valid reading, at distance d to the nearest polyline (d capped at

@@ -124,7 +124,7 @@ max_gap_m = 0.25
     EXPECT_NE(p.get(), polylines.get());  // deep copies
     EXPECT_EQ(p->Samples(), polylines->Samples());
     EXPECT_EQ(p->Options(), polylines->Options());
-    EXPECT_DOUBLE_EQ(p->Options().insertion.extraction.max_gap_m, 0.25);
+    EXPECT_DOUBLE_EQ(p->Options().insertion.shapes.extraction.max_gap_m, 0.25);
     EXPECT_EQ(Points(*q), Points(*points));
   }
   original.clear();
