@@ -34,6 +34,13 @@ struct CreationOptions {
   /// Spacing of the points sampled along the polylines: the point cloud of CPolylinePointsMap
   /// and the indices (globalIdx) of matchings, metres.
   double sample_spacing_m = 0.05;
+  /// CPolylinePointsMap only (e.g. as icp-slam's ICP reference): its point cloud also keeps the
+  /// points of every inserted scan at the insertion pose (as CSimplePointsMap inserts them, at
+  /// least scan_points_spacing_m apart), and determineMatching2D pairs the points the polylines
+  /// leave unpaired with the nearest kept point (same gate). The polylines are built and saved
+  /// as without it. Off, the cloud is the polyline samples only (see polyline_points_map.h).
+  bool keep_scan_points = false;
+  double scan_points_spacing_m = 0.05;  ///< minDistBetweenLaserPoints of the kept points, metres
   void Validate() const;
 };
 

@@ -124,6 +124,8 @@ std::vector<OptionField> OptionFields(PolylineMapOptions& o) {
   return {
       {S::kCreation, "index_cell_size_m", &o.creation.index_cell_size_m},
       {S::kCreation, "sample_spacing_m", &o.creation.sample_spacing_m},
+      {S::kCreation, "keep_scan_points", &o.creation.keep_scan_points},
+      {S::kCreation, "scan_points_spacing_m", &o.creation.scan_points_spacing_m},
       {S::kInsertion, "max_gap_m", &in.shapes.extraction.max_gap_m},
       {S::kInsertion, "gap_beam_spacing_factor", &in.shapes.extraction.gap_beam_spacing_factor},
       {S::kInsertion, "min_range_m", &in.shapes.extraction.min_range_m},
@@ -188,6 +190,9 @@ void SetFieldValue(const OptionField& field, double value) {
 void CreationOptions::Validate() const {
   Positive(index_cell_size_m, "CreationOptions::index_cell_size_m");
   Positive(sample_spacing_m, "CreationOptions::sample_spacing_m");
+  if (!(scan_points_spacing_m >= 0.0) || !std::isfinite(scan_points_spacing_m)) {
+    throw std::invalid_argument("CreationOptions::scan_points_spacing_m must be >= 0");
+  }
 }
 
 void LikelihoodOptions::Validate() const {
