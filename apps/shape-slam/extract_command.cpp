@@ -1,4 +1,6 @@
-// shape-slam extract: the polylines of one scan before and after DCE (paper §3.1).
+// shape-slam extract: one scan's shapes as the mapper, the scan matcher and the localizer see
+// them (ExtractScanShapes, paper §3.1): the polylines as grouped, as shape matching compares
+// them, and as the alignment samples them.
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -6,8 +8,9 @@
 #include "cli.h"
 #include "commands.h"
 #include "app_common.h"
-#include "shape_slam/discrete_curve_evolution.h"
+#include "shape_slam/pipeline.h"
 #include "shape_slam/polyline_extraction.h"
+#include "shape_slam/scan_shapes.h"
 #include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/drawing.h"
 #include "shape_slam_io/json_writer.h"
@@ -17,18 +20,27 @@ namespace {
 
 ArgParser MakeParser() {
   ArgParser parser("extract",
-                   "Groups the points of one laser scan into polylines (split where consecutive\n"
-                   "points are more than 0.20 m apart or at invalid/max-range readings) and\n"
-                   "simplifies them by Discrete Curve Evolution (paper §3.1). Coordinates are in\n"
-                   "the sensor frame, metres.");
+                   "One laser scan's shapes exactly as the mapper, `match` and `localize` see them\n"
+                   "(ExtractScanShapes, paper §3.1): the points grouped into polylines (split\n"
+                   "where consecutive points are farther apart than max_gap_m, widened with the\n"
+                   "range, or at invalid/max-range readings), simplified by Discrete Curve\n"
+                   "Evolution to the shapes matching compares (at most max_shape_vertices\n"
+                   "vertices) and, lightly, to the polylines the alignment samples. The beams are\n"
+                   "taken counter-clockwise first, as the mapper does. Coordinates are in the\n"
+                   "sensor frame, metres.");
   parser.Positional("LOG", "CARMEN log (.log/.clf[.gz]) or MRPT rawlog")
       .Option("--scan", {"K"}, "0-based index of the laser scan (other records do not count)", "0")
+      .Option("--config", {"FILE.ini"},
+              "parameters (config/default.ini: [extraction], [dce], shape keys of [pipeline])")
       .Option("--dce-threshold", {"T"},
-              "DCE stop threshold on the relevance K of eq. (1), metres",
-              std::to_string(DceParams{}.threshold_m))
-      .Option("--max-gap", {"M"}, "split distance between consecutive points, metres", "0.20")
+              "DCE stop threshold on the relevance K of eq. (1), metres (overrides the config)",
+              std::to_string(ShapeSlamParams{}.shapes.dce.threshold_m))
+      .Option("--max-gap", {"M"},
+              "split distance between consecutive points, metres (overrides the config)",
+              std::to_string(ShapeSlamParams{}.shapes.extraction.max_gap_m))
       .Flag("--json", "print one JSON object instead of text")
-      .Option("--svg", {"FILE"}, "draw points, raw and simplified polylines with a 1 m grid")
+      .Option("--svg", {"FILE"},
+              "draw points, grouped, matching and alignment polylines with a 1 m grid")
       .Flag("--strict", "fail on the first malformed log record instead of skipping it")
       .Epilog("Example:\n  shape-slam extract datasets/radish/intel.log.gz --scan 10 --svg scan10.svg");
   return parser;
@@ -45,45 +57,61 @@ std::vector<Point2> ScanPoints(const LaserScan& scan, const ExtractionParams& pa
   return points;
 }
 
-std::string Json(long long index, const LaserScan& scan, const std::vector<Polyline>& raw,
-                 const std::vector<Polyline>& simplified) {
+// The grouped polylines (ExtractScanShapes' input) and its two outputs, index by index.
+struct Extracted {
+  std::vector<Polyline> raw;
+  ScanShapes shapes;
+};
+
+void JsonArray(io::JsonWriter& json, const char* key, const std::vector<Polyline>& polylines) {
+  json.Key(key).BeginArray();
+  for (const Polyline& p : polylines) json.Value(p);
+  json.EndArray();
+}
+
+std::string Json(long long index, const LaserScan& scan, const Extracted& e) {
   io::JsonWriter json;
   json.BeginObject().Key("scan").Value(index).Key("timestamp").Value(scan.timestamp_s);
-  json.Key("raw_polylines").BeginArray();
-  for (const Polyline& p : raw) json.Value(p);
-  json.EndArray().Key("polylines").BeginArray();
-  for (const Polyline& p : simplified) json.Value(p);
-  json.EndArray().EndObject();
+  JsonArray(json, "raw_polylines", e.raw);
+  JsonArray(json, "polylines", e.shapes.coarse);
+  JsonArray(json, "alignment_polylines", e.shapes.fine);
+  json.EndObject();
   return json.str() + "\n";
 }
 
-std::string Text(long long index, const LaserScan& scan, const std::vector<Polyline>& raw,
-                 const std::vector<Polyline>& simplified, double threshold_m) {
-  std::size_t raw_points = 0, vertices = 0;
-  for (const Polyline& p : raw) raw_points += p.size();
-  for (const Polyline& p : simplified) vertices += p.size();
+std::size_t Vertices(const std::vector<Polyline>& polylines) {
+  std::size_t n = 0;
+  for (const Polyline& p : polylines) n += p.size();
+  return n;
+}
+
+std::string Text(long long index, const LaserScan& scan, const Extracted& e,
+                 const ScanShapesParams& params) {
+  const std::vector<Polyline>& coarse = e.shapes.coarse;
   std::ostringstream out;
   out << std::fixed << std::setprecision(6) << "scan " << index << " at t=" << scan.timestamp_s
-      << " s: " << scan.ranges_m.size() << " beams, " << raw.size() << " polylines ("
-      << raw_points << " points) -> " << vertices << " vertices after DCE (threshold "
-      << std::setprecision(3) << threshold_m << " m)\n";
-  for (std::size_t i = 0; i < simplified.size(); ++i) {
-    out << "polyline " << i << ": " << raw[i].size() << " points -> " << simplified[i].size()
+      << " s: " << scan.ranges_m.size() << " beams, " << e.raw.size() << " polylines ("
+      << Vertices(e.raw) << " points) -> " << Vertices(coarse)
+      << " vertices for shape matching (DCE threshold " << std::setprecision(3)
+      << params.dce.threshold_m << " m, at most " << params.max_shape_vertices
+      << " per polyline), " << Vertices(e.shapes.fine) << " for the alignment\n";
+  for (std::size_t i = 0; i < coarse.size(); ++i) {
+    out << "polyline " << i << ": " << e.raw[i].size() << " points -> " << coarse[i].size()
         << " vertices:";
-    for (const Point2& p : simplified[i]) out << " (" << p.x() << ", " << p.y() << ")";
+    for (const Point2& p : coarse[i]) out << " (" << p.x() << ", " << p.y() << ")";
     out << "\n";
   }
   return out.str();
 }
 
-io::Drawing MakeDrawing(long long index, const std::vector<Point2>& points,
-                        const std::vector<Polyline>& raw, const std::vector<Polyline>& simplified) {
+io::Drawing MakeDrawing(long long index, const std::vector<Point2>& points, const Extracted& e) {
   io::Drawing drawing;
   drawing.title = "scan " + std::to_string(index) + " (sensor frame)";
   drawing.pixels_per_m = 80.0;
   drawing.layers.push_back({"scan points", {}, points, {150, 150, 150}, 1.0, 1.6, false});
-  drawing.layers.push_back({"raw polylines", raw, {}, {120, 170, 230}, 1.0, 1.0, false});
-  drawing.layers.push_back({"after DCE", simplified, {}, {200, 30, 30}, 2.0, 1.0, true});
+  drawing.layers.push_back({"grouped polylines", e.raw, {}, {120, 170, 230}, 1.0, 1.0, false});
+  drawing.layers.push_back({"alignment", e.shapes.fine, {}, {230, 150, 40}, 1.0, 1.0, false});
+  drawing.layers.push_back({"shape matching", e.shapes.coarse, {}, {200, 30, 30}, 2.0, 1.0, true});
   drawing.layers.push_back({"sensor", {}, {Point2::Zero()}, {0, 120, 0}, 1.0, 4.0, false});
   return drawing;
 }
@@ -97,26 +125,24 @@ int RunExtract(const Args& args) {
     return 0;
   }
   const long long index = parser.Has("--scan") ? parser.GetIndex("--scan") : 0;
-  DceParams dce;
-  dce.threshold_m = parser.GetDouble("--dce-threshold", dce.threshold_m);
-  ExtractionParams extraction;
-  extraction.max_gap_m = parser.GetDouble("--max-gap", extraction.max_gap_m);
+  ScanShapesParams params = LoadParamsForApp(parser.GetOptional("--config")).shapes;
+  params.dce.threshold_m = parser.GetDouble("--dce-threshold", params.dce.threshold_m);
+  params.extraction.max_gap_m = parser.GetDouble("--max-gap", params.extraction.max_gap_m);
   try {
-    dce.Validate();
-    extraction.Validate();
+    params.Validate();
   } catch (const std::invalid_argument& e) {
     throw UsageError(e.what());
   }
-  const LaserScan scan = ReadScanAt(parser.Get("LOG"), index, parser.Has("--strict"));
-  const std::vector<Polyline> raw = ExtractPolylines(scan, extraction);
-  std::vector<Polyline> simplified;
-  for (const Polyline& p : raw) simplified.push_back(SimplifyDce(p, dce.threshold_m));
+  const LaserScan scan =
+      CounterClockwiseScan(ReadScanAt(parser.Get("LOG"), index, parser.Has("--strict")));
+  const Extracted extracted{ExtractPolylines(scan, params.extraction),
+                            ExtractScanShapes(scan, params)};
   if (const auto svg = parser.GetOptional("--svg")) {
     io::WriteFileAtomically(
-        *svg, io::RenderSvg(MakeDrawing(index, ScanPoints(scan, extraction), raw, simplified)));
+        *svg, io::RenderSvg(MakeDrawing(index, ScanPoints(scan, params.extraction), extracted)));
   }
-  std::cout << (parser.Has("--json") ? Json(index, scan, raw, simplified)
-                                     : Text(index, scan, raw, simplified, dce.threshold_m));
+  std::cout << (parser.Has("--json") ? Json(index, scan, extracted)
+                                     : Text(index, scan, extracted, params));
   return 0;
 }
 

@@ -15,14 +15,9 @@
 // Both kinds of odometry update the same pose, so a log mixing them uses the latest.
 // Other classes and observation types are skipped silently.
 //
-// CObservation2DRangeScan -> LaserScan: ranges from getScanRange(i), getScanRangeValidity(i)
-// false -> NaN; a valid reading that is NaN, inf or negative -> NaN, counted in
-// invalid_ranges. Beam i at -aperture/2 + i * aperture / (n - 1), negated when !rightToLeft
-// (CObservation2DRangeScan::getScanAngle, computed in double; a one-beam scan points at 0).
-// max_range_m = maxRange; T_robot_sensor = (x, y, yaw) of sensorPose; timestamp_s =
-// mrpt::Clock::toDouble(timestamp) (seconds since the UNIX epoch). Scans with no beam, no
-// timestamp, a non-finite or non-positive aperture or maxRange, or a non-finite sensor pose are
-// malformed records.
+// CObservation2DRangeScan -> LaserScan by the shared conversion (mrpt_scan.h: validity, NaN and
+// negative ranges, beam angles and order, maxRange, sensor pose); its invalid_ranges are counted
+// in the reader's stats. Scans it rejects, and scans with no timestamp, are malformed records.
 //
 // A truncated or corrupt rawlog (MRPT throws while deserializing entry N, or the gzip stream is
 // damaged): with LogReaderOptions::strict, LogError("file: entry N: ..."). Without it, when at

@@ -24,12 +24,11 @@ Pose2 ToPose2(const mrpt::poses::CPose3D& pose);
 Pose2 ToPose2(const mrpt::poses::CPose2D& pose);
 mrpt::poses::CPose2D ToCPose2D(const Pose2& pose);
 
-/// A CObservation2DRangeScan as the core's LaserScan, as the rawlog reader converts it
-/// (rawlog_reader.h): beam i at -aperture/2 + i * aperture / (n - 1), negated when !rightToLeft;
-/// invalid readings (validity flag false, NaN, inf or negative) become NaN; T_robot_sensor is
-/// (x, y, yaw) of sensorPose; timestamp_s is 0 when the scan has none; no odometry. Throws
-/// std::invalid_argument naming the problem for a scan without beams, with a non-finite or
-/// non-positive aperture or maxRange, or a non-finite sensor pose.
+/// A CObservation2DRangeScan as the core's LaserScan: the rawlog reader's conversion
+/// (shape_slam_io/mrpt_scan.h, FromMrptScan), one set of rules for validity, NaN and negative
+/// ranges, beam angles and order, maxRange and sensor pose; timestamp_s is 0 when the scan has
+/// none; no odometry. Throws std::invalid_argument naming the problem for a scan without beams,
+/// with a non-finite or non-positive aperture or maxRange, or a non-finite sensor pose.
 LaserScan ToLaserScan(const mrpt::obs::CObservation2DRangeScan& observation);
 
 /// The (x, y) of every point of a points map, in the map's frame, metres.

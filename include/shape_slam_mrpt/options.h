@@ -19,9 +19,7 @@
 #include <iosfwd>
 #include <string>
 
-#include "shape_slam/map_update.h"
-#include "shape_slam/polyline_extraction.h"
-#include "shape_slam/visibility.h"
+#include "shape_slam/scan_insertion.h"
 
 namespace mrpt::config {
 class CConfigFileBase;
@@ -36,25 +34,22 @@ struct CreationOptions {
   /// Spacing of the points sampled along the polylines: the point cloud of CPolylinePointsMap
   /// and the indices (globalIdx) of matchings, metres.
   double sample_spacing_m = 0.05;
+  /// CPolylinePointsMap only (e.g. as icp-slam's ICP reference): its point cloud also keeps the
+  /// points of every inserted scan at the insertion pose (as CSimplePointsMap inserts them, at
+  /// least scan_points_spacing_m apart), and determineMatching2D pairs the points the polylines
+  /// leave unpaired with the nearest kept point (same gate). The polylines are built and saved
+  /// as without it. Off, the cloud is the polyline samples only (see polyline_points_map.h).
+  bool keep_scan_points = false;
+  double scan_points_spacing_m = 0.05;  ///< minDistBetweenLaserPoints of the kept points, metres
   void Validate() const;
 };
 
-/// [..._insertOpts]: how a CObservation2DRangeScan becomes polylines and updates the map, as in
-/// the pipeline (pipeline.h): extraction (§3.1), the light DCE of the alignment polylines, the
-/// visible map shape at the scan's pose (for the contradiction rule) and the map update (§5.2).
-struct InsertionOptions {
-  ExtractionParams extraction;
-  /// ScanShapesParams::alignment_dce_threshold_m, metres.
-  double alignment_dce_threshold_m = 0.005;
-  /// ScanShapesParams::alignment_max_deviation_m, metres.
-  double alignment_max_deviation_m = 0.02;
-  /// The visible map shape; max_range_m is cut to the scan's farthest reading + 1 m, fov_rad is
-  /// the scan's field of view widened by visibility_fov_margin_rad on each side.
-  VisibilityParams visibility;
-  double visibility_fov_margin_rad = 0.35;  ///< radians
-  MapUpdateParams map_update;
-  void Validate() const;
-};
+/// [..._insertOpts]: how a CObservation2DRangeScan becomes polylines and updates the map: the
+/// core's scan insertion (scan_insertion.h), the step the mapper takes for a keyframe, so a map
+/// built here from scans at given poses is the one the mapper builds from them at those poses.
+/// Keys: ExtractionParams fields, alignment_dce_threshold_m and alignment_max_deviation_m
+/// (ScanShapesParams), visibility_* (VisibilityParams) and MapUpdateParams fields.
+using InsertionOptions = ScanInsertionParams;
 
 /// [..._likelihoodOpts]: a likelihood field on the polylines (as MRPT's LF model for grids):
 /// every `decimation`-th valid reading, at distance d to the nearest polyline (d capped at

@@ -3,10 +3,11 @@
 // docs/mrpt-plugin.md) and CMultiMetricMap can build, match against, save and draw it.
 //
 //  * insertObservation(CObservation2DRangeScan, robot pose): the scan is converted to a
-//    LaserScan at the caller's pose and goes through the pipeline's own steps: extraction
-//    (§3.1), the light DCE of the alignment polylines, the visible map shape at that pose, and
-//    UpdateMap (§5.2) with the pose trusted (the caller vouches for it). Other observation types
-//    are not inserted (returns false).
+//    LaserScan (shape_slam_io/mrpt_scan.h, as the rawlog reader converts it) and inserted by the
+//    core's InsertScan (scan_insertion.h: ExtractScanShapes, the visible map shape at that pose,
+//    UpdateMap, §3.1 and §5.2) with the pose trusted (the caller vouches for it): the map the
+//    mapper's insertion makes from the same scans at the same poses. Scans without polylines and
+//    other observation types are not inserted (returns false).
 //  * computeObservationLikelihood(CObservation2DRangeScan, pose): a likelihood field on the
 //    polylines (LikelihoodOptions), for particle filters.
 //  * determineMatching2D / compute3DMatchingRatio against a points map: each point of the other

@@ -9,6 +9,14 @@
 // insertion. determineMatching2D, compute3DMatchingRatio, the likelihood and the saved files are
 // the polyline map's (point-to-line pairing, globalIdx = index of the nearest cloud point).
 //
+// With CreationOptions::keep_scan_points the cloud also holds the inserted scans' own points
+// (after the samples; globalIdx counts on past the samples), and determineMatching2D pairs
+// every point the polylines leave unpaired (point-to-line, as without the option) with the
+// nearest kept scan point within the same gate. That is the setting for icp-slam: ICP against
+// the polylines alone loses what the polylines do not keep (isolated returns, short and
+// simplified-away detail), and on some logs (aces) that is what holds the robot; see
+// docs/mrpt-plugin.md for the measurements.
+//
 // Ini: `polylinePointsMap_count=1` (or `shape_slam::CPolylinePointsMap_count=1`), the same
 // option sections as CPolylineMap. With icp-slam do NOT also create a pointsMap, and use
 // `ICP_algorithm = icpClassic` (the Levenberg-Marquardt variant needs a plain points map).
@@ -69,8 +77,15 @@ class CPolylinePointsMap : public mrpt::maps::CSimplePointsMap {
 
  private:
   void ResamplePoints();
+  void AddScanPointPairs(const mrpt::maps::CMetricMap* otherMap,
+                         const mrpt::poses::CPose2D& otherMapPose,
+                         mrpt::tfest::TMatchingPairList& correspondences,
+                         const mrpt::maps::TMatchingParams& params,
+                         mrpt::maps::TMatchingExtraResults& extraResults) const;
 
   CPolylineMap polylines_;
+  /// The inserted scans' points (CreationOptions::keep_scan_points), map frame.
+  mrpt::maps::CSimplePointsMap scan_points_;
 };
 
 }  // namespace shape_slam

@@ -18,12 +18,12 @@
 #include <algorithm>
 #include <cmath>
 #include <deque>
-#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
 
 #include "log_reader_internal.h"
+#include "shape_slam_io/mrpt_scan.h"
 
 namespace shape_slam::io {
 namespace {
@@ -120,67 +120,14 @@ bool IsFinite(const mrpt::poses::CPose2D& pose) {
   return std::isfinite(pose.x()) && std::isfinite(pose.y()) && std::isfinite(pose.phi());
 }
 
-void CheckScan(const mrpt::obs::CObservation2DRangeScan& obs) {
-  if (obs.getScanSize() == 0) throw RecordError("laser scan with no beam");
+/// The rawlog's rule on top of the shared conversion (mrpt_scan.h): a scan needs a timestamp.
+ConvertedMrptScan ToLaserScan(const mrpt::obs::CObservation2DRangeScan& obs) {
   if (obs.timestamp == mrpt::Clock::time_point()) throw RecordError("laser scan with no timestamp");
-  if (!std::isfinite(obs.aperture) || obs.aperture <= 0.0f) {
-    throw RecordError("laser scan aperture " + internal::FormatNumber(obs.aperture) +
-                      " is not > 0");
+  try {
+    return FromMrptScan(obs);
+  } catch (const std::invalid_argument& e) {
+    throw RecordError(e.what());
   }
-  if (!std::isfinite(obs.maxRange) || obs.maxRange <= 0.0f) {
-    throw RecordError("laser scan maxRange " + internal::FormatNumber(obs.maxRange) +
-                      " is not > 0");
-  }
-  const mrpt::poses::CPose3D& pose = obs.sensorPose;
-  if (!std::isfinite(pose.x()) || !std::isfinite(pose.y()) || !std::isfinite(pose.yaw())) {
-    throw RecordError("laser scan sensorPose is not finite");
-  }
-}
-
-/// Beam i direction as CObservation2DRangeScan::getScanAngle defines it, in double.
-std::vector<double> BeamAngles(const mrpt::obs::CObservation2DRangeScan& obs) {
-  const std::size_t n = obs.getScanSize();
-  std::vector<double> angles_rad(n, 0.0);
-  if (n < 2) return angles_rad;
-  const double aperture_rad = obs.aperture;
-  double first_rad = -0.5 * aperture_rad;
-  double step_rad = aperture_rad / static_cast<double>(n - 1);
-  if (!obs.rightToLeft) {
-    first_rad = -first_rad;
-    step_rad = -step_rad;
-  }
-  for (std::size_t i = 0; i < n; ++i) angles_rad[i] = first_rad + step_rad * static_cast<double>(i);
-  return angles_rad;
-}
-
-struct ConvertedScan {
-  LaserScan scan;
-  std::size_t invalid_ranges = 0;
-};
-
-/// CObservation2DRangeScan -> LaserScan (odometry left to the caller). Throws RecordError.
-ConvertedScan ToLaserScan(const mrpt::obs::CObservation2DRangeScan& obs) {
-  CheckScan(obs);
-  ConvertedScan converted;
-  LaserScan& scan = converted.scan;
-  const std::size_t n = obs.getScanSize();
-  scan.ranges_m.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    double range_m = obs.getScanRange(i);
-    if (!obs.getScanRangeValidity(i)) {
-      range_m = std::numeric_limits<double>::quiet_NaN();
-    } else if (!std::isfinite(range_m) || range_m < 0.0) {
-      range_m = std::numeric_limits<double>::quiet_NaN();
-      ++converted.invalid_ranges;
-    }
-    scan.ranges_m[i] = range_m;
-  }
-  scan.angles_rad = BeamAngles(obs);
-  scan.timestamp_s = mrpt::Clock::toDouble(obs.timestamp);
-  scan.max_range_m = obs.maxRange;
-  const mrpt::poses::CPose3D& pose = obs.sensorPose;
-  scan.T_robot_sensor = Pose2(pose.x(), pose.y(), NormalizeAngle(pose.yaw()));
-  return converted;
 }
 
 Pose2 ToPose2(const mrpt::poses::CPose2D& pose) {
@@ -304,7 +251,7 @@ void RawlogReader::Impl::HandleObservation(const mrpt::obs::CObservation& observ
   const auto* obs = dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(&observation);
   if (obs == nullptr) return;
   try {
-    ConvertedScan converted = ToLaserScan(*obs);
+    ConvertedMrptScan converted = ToLaserScan(*obs);
     converted.scan.T_odom_robot = T_odom_robot;
     pending.push_back({std::move(converted.scan), converted.invalid_ranges, index});
   } catch (const RecordError& e) {

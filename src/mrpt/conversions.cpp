@@ -7,46 +7,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <map>
 #include <stdexcept>
-#include <string>
+
+#include "shape_slam_io/mrpt_scan.h"
 
 namespace shape_slam {
-namespace {
-
-void CheckScan(const mrpt::obs::CObservation2DRangeScan& obs) {
-  if (obs.getScanSize() == 0) throw std::invalid_argument("laser scan with no beam");
-  if (!std::isfinite(obs.aperture) || obs.aperture <= 0.0f) {
-    throw std::invalid_argument("laser scan aperture " + std::to_string(obs.aperture) +
-                                " is not > 0");
-  }
-  if (!std::isfinite(obs.maxRange) || obs.maxRange <= 0.0f) {
-    throw std::invalid_argument("laser scan maxRange " + std::to_string(obs.maxRange) +
-                                " is not > 0");
-  }
-  const mrpt::poses::CPose3D& pose = obs.sensorPose;
-  if (!std::isfinite(pose.x()) || !std::isfinite(pose.y()) || !std::isfinite(pose.yaw())) {
-    throw std::invalid_argument("laser scan sensorPose is not finite");
-  }
-}
-
-// Beam i direction as CObservation2DRangeScan::getScanAngle defines it, in double.
-std::vector<double> BeamAngles(const mrpt::obs::CObservation2DRangeScan& obs) {
-  const std::size_t n = obs.getScanSize();
-  std::vector<double> angles_rad(n, 0.0);
-  if (n < 2) return angles_rad;
-  double first_rad = -0.5 * static_cast<double>(obs.aperture);
-  double step_rad = static_cast<double>(obs.aperture) / static_cast<double>(n - 1);
-  if (!obs.rightToLeft) {
-    first_rad = -first_rad;
-    step_rad = -step_rad;
-  }
-  for (std::size_t i = 0; i < n; ++i) angles_rad[i] = first_rad + step_rad * static_cast<double>(i);
-  return angles_rad;
-}
-
-}  // namespace
 
 Pose2 ToPose2(const mrpt::poses::CPose3D& pose) {
   return {pose.x(), pose.y(), NormalizeAngle(pose.yaw())};
@@ -59,21 +25,7 @@ Pose2 ToPose2(const mrpt::poses::CPose2D& pose) {
 mrpt::poses::CPose2D ToCPose2D(const Pose2& pose) { return {pose.x, pose.y, pose.theta}; }
 
 LaserScan ToLaserScan(const mrpt::obs::CObservation2DRangeScan& obs) {
-  CheckScan(obs);
-  LaserScan scan;
-  const std::size_t n = obs.getScanSize();
-  scan.ranges_m.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    const double range_m = obs.getScanRange(i);
-    const bool usable = obs.getScanRangeValidity(i) && std::isfinite(range_m) && range_m >= 0.0;
-    scan.ranges_m[i] = usable ? range_m : std::numeric_limits<double>::quiet_NaN();
-  }
-  scan.angles_rad = BeamAngles(obs);
-  scan.timestamp_s =
-      obs.timestamp == mrpt::Clock::time_point() ? 0.0 : mrpt::Clock::toDouble(obs.timestamp);
-  scan.max_range_m = obs.maxRange;
-  scan.T_robot_sensor = ToPose2(obs.sensorPose);
-  return scan;
+  return io::FromMrptScan(obs).scan;
 }
 
 std::vector<Point2> PointsOf(const mrpt::maps::CPointsMap& points) {

@@ -124,11 +124,14 @@ std::vector<OptionField> OptionFields(PolylineMapOptions& o) {
   return {
       {S::kCreation, "index_cell_size_m", &o.creation.index_cell_size_m},
       {S::kCreation, "sample_spacing_m", &o.creation.sample_spacing_m},
-      {S::kInsertion, "max_gap_m", &in.extraction.max_gap_m},
-      {S::kInsertion, "min_range_m", &in.extraction.min_range_m},
-      {S::kInsertion, "min_points", &in.extraction.min_points},
-      {S::kInsertion, "alignment_dce_threshold_m", &in.alignment_dce_threshold_m},
-      {S::kInsertion, "alignment_max_deviation_m", &in.alignment_max_deviation_m},
+      {S::kCreation, "keep_scan_points", &o.creation.keep_scan_points},
+      {S::kCreation, "scan_points_spacing_m", &o.creation.scan_points_spacing_m},
+      {S::kInsertion, "max_gap_m", &in.shapes.extraction.max_gap_m},
+      {S::kInsertion, "gap_beam_spacing_factor", &in.shapes.extraction.gap_beam_spacing_factor},
+      {S::kInsertion, "min_range_m", &in.shapes.extraction.min_range_m},
+      {S::kInsertion, "min_points", &in.shapes.extraction.min_points},
+      {S::kInsertion, "alignment_dce_threshold_m", &in.shapes.alignment_dce_threshold_m},
+      {S::kInsertion, "alignment_max_deviation_m", &in.shapes.alignment_max_deviation_m},
       {S::kInsertion, "visibility_max_range_m", &in.visibility.max_range_m},
       {S::kInsertion, "visibility_angular_resolution_rad", &in.visibility.angular_resolution_rad},
       {S::kInsertion, "visibility_min_piece_length_m", &in.visibility.min_piece_length_m},
@@ -144,12 +147,15 @@ std::vector<OptionField> OptionFields(PolylineMapOptions& o) {
       {S::kInsertion, "merge_min_overlap_m", &mu.merge_min_overlap_m},
       {S::kInsertion, "merge_min_overlap_fraction", &mu.merge_min_overlap_fraction},
       {S::kInsertion, "untrusted_clearance_m", &mu.untrusted_clearance_m},
+      {S::kInsertion, "untrusted_near_fraction", &mu.untrusted_near_fraction},
       {S::kInsertion, "explained_distance_m", &mu.explained_distance_m},
       {S::kInsertion, "explained_fraction", &mu.explained_fraction},
       {S::kInsertion, "min_new_length_m", &mu.min_new_length_m},
       {S::kInsertion, "contradiction_margin_m", &mu.contradiction_margin_m},
       {S::kInsertion, "drop_max_observations", &mu.drop_max_observations},
       {S::kInsertion, "drop_min_contradictions", &mu.drop_min_contradictions},
+      {S::kInsertion, "check_sample_spacing_m", &mu.check_sample_spacing_m},
+      {S::kInsertion, "merge_check_spacing_m", &mu.merge_check_spacing_m},
       {S::kLikelihood, "sigma_m", &o.likelihood.sigma_m},
       {S::kLikelihood, "max_corr_distance_m", &o.likelihood.max_corr_distance_m},
       {S::kLikelihood, "z_hit", &o.likelihood.z_hit},
@@ -184,17 +190,9 @@ void SetFieldValue(const OptionField& field, double value) {
 void CreationOptions::Validate() const {
   Positive(index_cell_size_m, "CreationOptions::index_cell_size_m");
   Positive(sample_spacing_m, "CreationOptions::sample_spacing_m");
-}
-
-void InsertionOptions::Validate() const {
-  extraction.Validate();
-  Positive(alignment_dce_threshold_m, "InsertionOptions::alignment_dce_threshold_m");
-  Positive(alignment_max_deviation_m, "InsertionOptions::alignment_max_deviation_m");
-  visibility.Validate();
-  if (!(visibility_fov_margin_rad >= 0.0) || !std::isfinite(visibility_fov_margin_rad)) {
-    throw std::invalid_argument("InsertionOptions::visibility_fov_margin_rad must be >= 0");
+  if (!(scan_points_spacing_m >= 0.0) || !std::isfinite(scan_points_spacing_m)) {
+    throw std::invalid_argument("CreationOptions::scan_points_spacing_m must be >= 0");
   }
-  map_update.Validate();
 }
 
 void LikelihoodOptions::Validate() const {

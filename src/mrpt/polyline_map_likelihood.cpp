@@ -70,7 +70,7 @@ double CPolylineMap::internal_computeObservationLikelihood(
   double log_likelihood = 0.0;
   for (std::size_t i = 0; i < scan.ranges_m.size(); i += static_cast<std::size_t>(lo.decimation)) {
     const double r = scan.ranges_m[i];
-    if (!std::isfinite(r) || r <= options_.insertion.extraction.min_range_m || r >= max_range_m) {
+    if (!std::isfinite(r) || r <= options_.insertion.shapes.extraction.min_range_m || r >= max_range_m) {
       continue;
     }
     const Point2 p_map =

@@ -3,10 +3,12 @@
 #include <mrpt/opengl/CSetOfObjects.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
 #include <memory>
 #include <sstream>
 
 #include "shape_slam_io/map_file.h"
+#include "shape_slam_mrpt/conversions.h"
 
 IMPLEMENTS_SERIALIZABLE(CPolylinePointsMap, mrpt::maps::CSimplePointsMap, shape_slam)
 
@@ -15,10 +17,13 @@ MAP_DEFINITION_REGISTER("shape_slam::CPolylinePointsMap,polylinePointsMap",
 
 namespace shape_slam {
 
-CPolylinePointsMap::CPolylinePointsMap(const PolylineMapOptions& options) : polylines_(options) {}
+CPolylinePointsMap::CPolylinePointsMap(const PolylineMapOptions& options) : polylines_(options) {
+  scan_points_.insertionOptions.isPlanarMap = true;
+}
 
 void CPolylinePointsMap::SetMap(const PolylineMap& map) {
   polylines_.SetMap(map);
+  scan_points_.clear();
   ResamplePoints();
 }
 
@@ -27,26 +32,38 @@ void CPolylinePointsMap::SetOptions(const PolylineMapOptions& options) {
   ResamplePoints();
 }
 
-// The point cloud is the polylines' samples (z = 0); the kd-tree is rebuilt on demand.
+// The point cloud is the polylines' samples (z = 0), then the kept scan points; the kd-tree is
+// rebuilt on demand.
 void CPolylinePointsMap::ResamplePoints() {
   const std::vector<Point2>& samples = polylines_.Samples();
+  const auto& xs = scan_points_.getPointsBufferRef_x();
+  const auto& ys = scan_points_.getPointsBufferRef_y();
   setSize(0);
-  reserve(samples.size());
+  reserve(samples.size() + xs.size());
   for (const Point2& p : samples) {
     insertPointFast(static_cast<float>(p.x()), static_cast<float>(p.y()), 0.0f);
   }
+  for (std::size_t i = 0; i < xs.size(); ++i) insertPointFast(xs[i], ys[i], 0.0f);
   mark_as_modified();
 }
 
 void CPolylinePointsMap::internal_clear() {
   polylines_.clear();
+  scan_points_.clear();
   CSimplePointsMap::internal_clear();
 }
 
 bool CPolylinePointsMap::internal_insertObservation(
     const mrpt::obs::CObservation& obs,
     const std::optional<const mrpt::poses::CPose3D>& robotPose) {
-  if (!polylines_.insertObservation(obs, robotPose)) return false;
+  const bool inserted = polylines_.insertObservation(obs, robotPose);
+  bool kept = false;
+  if (Options().creation.keep_scan_points) {
+    scan_points_.insertionOptions.minDistBetweenLaserPoints =
+        static_cast<float>(Options().creation.scan_points_spacing_m);
+    kept = scan_points_.insertObservation(obs, robotPose);
+  }
+  if (!inserted && !kept) return false;
   ResamplePoints();
   return true;
 }
@@ -66,6 +83,49 @@ void CPolylinePointsMap::determineMatching2D(
     mrpt::tfest::TMatchingPairList& correspondences, const mrpt::maps::TMatchingParams& params,
     mrpt::maps::TMatchingExtraResults& extraResults) const {
   polylines_.determineMatching2D(otherMap, otherMapPose, correspondences, params, extraResults);
+  if (Options().creation.keep_scan_points) {
+    AddScanPointPairs(otherMap, otherMapPose, correspondences, params, extraResults);
+  }
+}
+
+// The other map's points the polylines left unpaired, paired with the nearest kept scan point
+// within the same gate (globalIdx after the samples').
+void CPolylinePointsMap::AddScanPointPairs(const mrpt::maps::CMetricMap* otherMap,
+                                           const mrpt::poses::CPose2D& otherMapPose,
+                                           mrpt::tfest::TMatchingPairList& correspondences,
+                                           const mrpt::maps::TMatchingParams& params,
+                                           mrpt::maps::TMatchingExtraResults& extraResults) const {
+  const auto* other = dynamic_cast<const mrpt::maps::CPointsMap*>(otherMap);
+  if (other == nullptr || scan_points_.empty()) return;
+  const std::vector<Point2> local = PointsOf(*other);
+  std::vector<bool> paired(local.size(), false);
+  for (const auto& pair : correspondences) paired[pair.localIdx] = true;
+  const PointTransform T_this_other(ToPose2(otherMapPose));
+  const Point2 pivot(params.angularDistPivotPoint.x, params.angularDistPivotPoint.y);
+  const std::size_t step = std::max<std::size_t>(1, params.decimation_other_map_points);
+  const std::size_t offset = polylines_.Samples().size();
+  std::size_t considered = 0;
+  for (std::size_t i = params.offset_other_map_points; i < local.size(); i += step) {
+    ++considered;
+    if (paired[i]) continue;
+    const Point2 p = T_this_other(local[i]);
+    const double gate_m = params.maxDistForCorrespondence +
+                          params.maxAngularDistForCorrespondence * (p - pivot).norm();
+    float x = 0, y = 0, d2 = 0;
+    const std::size_t j = scan_points_.kdTreeClosestPoint2D(static_cast<float>(p.x()),
+                                                            static_cast<float>(p.y()), x, y, d2);
+    if (!(d2 <= gate_m * gate_m)) continue;
+    mrpt::tfest::TMatchingPair pair(static_cast<std::uint32_t>(offset + j),
+                                    static_cast<std::uint32_t>(i), x, y, 0.0f,
+                                    static_cast<float>(local[i].x()),
+                                    static_cast<float>(local[i].y()), 0.0f);
+    pair.errorSquareAfterTransformation = d2;
+    correspondences.push_back(pair);
+    extraResults.sumSqrDist += d2;
+  }
+  extraResults.correspondencesRatio =
+      considered == 0 ? 0.0f
+                      : static_cast<float>(correspondences.size()) / static_cast<float>(considered);
 }
 
 float CPolylinePointsMap::compute3DMatchingRatio(
@@ -98,16 +158,20 @@ std::string CPolylinePointsMap::asString() const {
 }
 
 // Version 0: generic map params, then the polyline map (an object); the points are resampled.
-std::uint8_t CPolylinePointsMap::serializeGetVersion() const { return 0; }
+// Version 1: then the kept scan points (a CSimplePointsMap object).
+std::uint8_t CPolylinePointsMap::serializeGetVersion() const { return 1; }
 
 void CPolylinePointsMap::serializeTo(mrpt::serialization::CArchive& out) const {
-  out << genericMapParams << polylines_;
+  out << genericMapParams << polylines_ << scan_points_;
 }
 
 void CPolylinePointsMap::serializeFrom(mrpt::serialization::CArchive& in, std::uint8_t version) {
   switch (version) {
     case 0:
+    case 1:
       in >> genericMapParams >> polylines_;
+      scan_points_.clear();
+      if (version >= 1) in >> scan_points_;
       ResamplePoints();
       break;
     default:

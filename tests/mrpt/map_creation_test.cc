@@ -84,8 +84,8 @@ decimation = 4
   ASSERT_NE(map, nullptr);
   const PolylineMapOptions& o = map->Options();
   EXPECT_DOUBLE_EQ(o.creation.sample_spacing_m, 0.08);
-  EXPECT_DOUBLE_EQ(o.insertion.extraction.max_gap_m, 0.3);
-  EXPECT_EQ(o.insertion.extraction.min_points, 3);
+  EXPECT_DOUBLE_EQ(o.insertion.shapes.extraction.max_gap_m, 0.3);
+  EXPECT_EQ(o.insertion.shapes.extraction.min_points, 3);
   EXPECT_DOUBLE_EQ(o.insertion.map_update.dce_threshold_m, 0.04);
   EXPECT_DOUBLE_EQ(o.insertion.visibility_fov_margin_rad, 0.2);
   EXPECT_DOUBLE_EQ(o.likelihood.sigma_m, 0.1);
@@ -117,10 +117,10 @@ TEST(MapCreation, DefaultsAreThePipelines) {
   const PolylineMapOptions options;
   const ShapeSlamParams pipeline;
   EXPECT_DOUBLE_EQ(options.creation.index_cell_size_m, pipeline.index_cell_size_m);
-  EXPECT_DOUBLE_EQ(options.insertion.alignment_dce_threshold_m, pipeline.shapes.alignment_dce_threshold_m);
-  EXPECT_DOUBLE_EQ(options.insertion.alignment_max_deviation_m, pipeline.shapes.alignment_max_deviation_m);
+  EXPECT_DOUBLE_EQ(options.insertion.shapes.alignment_dce_threshold_m, pipeline.shapes.alignment_dce_threshold_m);
+  EXPECT_DOUBLE_EQ(options.insertion.shapes.alignment_max_deviation_m, pipeline.shapes.alignment_max_deviation_m);
   EXPECT_DOUBLE_EQ(options.insertion.visibility_fov_margin_rad, pipeline.visibility_fov_margin_rad);
-  EXPECT_DOUBLE_EQ(options.insertion.extraction.max_gap_m, pipeline.shapes.extraction.max_gap_m);
+  EXPECT_DOUBLE_EQ(options.insertion.shapes.extraction.max_gap_m, pipeline.shapes.extraction.max_gap_m);
   EXPECT_DOUBLE_EQ(options.insertion.map_update.dce_threshold_m,
                    pipeline.map_update.dce_threshold_m);
   EXPECT_DOUBLE_EQ(options.insertion.visibility.max_range_m, pipeline.visibility.max_range_m);

@@ -18,6 +18,7 @@
 #include <string>
 
 #include "mrpt/mrpt_test_scenes.h"
+#include "shape_slam/scan_insertion.h"
 #include "shape_slam_io/map_file.h"
 #include "shape_slam_mrpt/conversions.h"
 
@@ -69,6 +70,23 @@ TEST(CPolylineMap, InsertedScansGiveTheRoomsWalls) {
   }
   EXPECT_GT(covered, total * 0.8);
   EXPECT_THAT(map.asString(), ::testing::HasSubstr("polylines"));
+}
+
+// Issue 13: the plugin inserts as the core does (scan_insertion.h): the same scans at the same
+// poses give exactly the map the core's InsertScan builds from the rawlog reader's conversion.
+TEST(CPolylineMap, MapIsTheCoresInsertionOfTheSameScansAtTheSamePoses) {
+  const CPolylineMap plugin = RoomMap();
+  const PolylineMapOptions options;
+  PolylineMap core(options.creation.index_cell_size_m);
+  for (const Pose2& pose : MappingPoses()) {
+    // The pose as the plugin receives it (through a CPose3D), so that both see the same bits.
+    const Pose2 T_map_robot = ToPose2(ToCPose3D(pose));
+    const ScanInsertionResult inserted =
+        InsertScan(core, ToLaserScan(SimulateScan(pose)), T_map_robot, true, options.insertion);
+    EXPECT_GT(inserted.polylines, 0);
+  }
+  ASSERT_FALSE(core.Empty());
+  ExpectSameMaps(plugin.Map(), core);
 }
 
 TEST(CPolylineMap, OnlyLaserScansAreInserted) {
@@ -173,7 +191,7 @@ TEST(CPolylineMap, MatchingAgainstAnUnsupportedMapIsAClearError) {
 
 TEST(CPolylineMap, SerializationRoundTripIsExact) {
   PolylineMapOptions options;
-  options.insertion.extraction.max_gap_m = 0.25;
+  options.insertion.shapes.extraction.max_gap_m = 0.25;
   options.likelihood.sigma_m = 0.12;
   CPolylineMap map(options);
   for (const Pose2& pose : MappingPoses())
