@@ -9,6 +9,7 @@
 #include "shape_slam/alignment.h"
 #include "shape_slam/internal/localization.h"
 #include "shape_slam/internal/validation.h"
+#include "shape_slam/scan_insertion.h"
 #include "shape_slam/internal/model_icp.h"
 
 namespace shape_slam {
@@ -225,15 +226,16 @@ void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
 void ShapeSlam::OptimizeAndRebuild() {
   graph_.Optimize(params_.loop_closure.graph);
   map_.Clear();
+  ScanInsertionParams insertion;
+  insertion.shapes = params_.shapes;
+  insertion.visibility = params_.visibility;
+  insertion.visibility_fov_margin_rad = params_.visibility_fov_margin_rad;
+  insertion.map_update = params_.map_update;
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
     const Keyframe& kf = keyframes_[k];
     const Pose2 T_map_sensor = graph_.Node(places_[k].node) * kf.scan.T_robot_sensor;
-    std::vector<Polyline> perceived;
-    for (const Polyline& p : places_[k].shapes.fine) perceived.push_back(Transform(T_map_sensor, p));
-    const std::vector<VisiblePolyline> visible =
-        map_.Visible(T_map_sensor, VisibilityFor(kf.scan, false, params_));
-    UpdateMap(map_, perceived, T_map_sensor, visible, kf.scan, kf.trusted || map_.Empty(),
-              params_.map_update);
+    InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor, kf.trusted || map_.Empty(),
+                     insertion);
   }
 }
 
