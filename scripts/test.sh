@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # The test command (README, second command; .ci/run calls it): installs what is missing, builds
 # and runs the whole test suite, then again under AddressSanitizer + UndefinedBehaviorSanitizer,
-# runs the benchmark harness on a small log (bench/run_all --quick), and checks that the core
+# runs the benchmark harness and the speed check on a small log (bench/run_all --quick,
+# bench/speed --quick), and checks that the core
 # builds with the MRPT parts switched off.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -19,6 +20,9 @@ ctest --test-dir "${BUILD_DIR:-build}" --output-on-failure -j"$jobs"
 
 step "benchmark harness, quick mode (bench/run_all --quick)"
 bench/run_all --quick
+
+step "speed check, quick mode (bench/speed --quick: 200 scans of intel, about 5 s)"
+bench/speed --quick
 
 step "sanitizer build (ASan + UBSan)"
 BUILD_DIR=build-asan BUILD_TYPE=RelWithDebInfo \

@@ -62,7 +62,8 @@ ArgParser MakeParser() {
           "                   COccupancyGridMap2D (MRPT builds only)\n"
           "  map.simplemap    the keyframe scans at their corrected poses, an MRPT CSimpleMap\n"
           "                   (observations2map, RawLogViewer; MRPT builds only)\n"
-          "  stats.json       scans, wall time, per-scan times, map size, log issues\n\n"
+          "  stats.json       scans, wall time, per-scan times, map size, log issues\n"
+          "  scan_times.csv   per laser scan: scan index, timestamp, processing time (ms)\n\n"
           "Example:\n  shape-slam run datasets/radish/intel.log.gz --out intel-out");
   return parser;
 }
@@ -141,6 +142,18 @@ void ReportRunIssues(const RunOutput& out, const OdometryReport& odometry, bool 
               << out.trajectory.size() << " scans (" << 100.0 * MatchedFraction(out)
               << " %) found a trusted match; the map may be inconsistent where matching failed\n";
   }
+}
+
+// One line per laser scan: its index, its timestamp and the time ShapeSlam::Process took.
+std::string FormatScanTimes(const RunOutput& out) {
+  std::ostringstream csv;
+  csv << "scan,timestamp_s,ms\n" << std::fixed;
+  const std::size_t n = std::min(out.scan_ms.size(), out.trajectory.size());
+  for (std::size_t i = 0; i < n; ++i) {
+    csv << i << ',' << std::setprecision(6) << out.trajectory[i].timestamp_s << ','
+        << std::setprecision(4) << out.scan_ms[i] << '\n';
+  }
+  return csv.str();
 }
 
 std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t map_file_bytes,
@@ -234,6 +247,7 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
                        {"map.svg", io::RenderSvg(drawing)},
                        {"map.png", io::RenderPng(drawing)}};
   for (auto& file : RenderGridOutputs(slam, grids)) files.push_back(std::move(file));
+  files.emplace_back("scan_times.csv", FormatScanTimes(out));
   files.emplace_back("stats.json", stats_json);
   std::vector<std::string> names;
   for (const auto& [name, content] : files) {

@@ -116,22 +116,35 @@ bool AssignBins(const Sweep& sweep, SweptSegment& s) {
   return s.num_bins > 0;
 }
 
-// Depth of a segment part in bin k: along the centre ray, or its nearer end if the ray misses.
-// The part [ta, tb] of a segment that lies between the edge rays of bin k.
-std::pair<double, double> PartInBin(const Sweep& sweep, const SweptSegment& s, int k) {
+// The part [ta, tb] of a segment that lies between the edge rays of one of its bins (empty when
+// tb <= ta), and the depth of the segment in that bin: the distance of the part's nearest point.
+// (Along the centre ray alone, a polyline would hide its own continuation at a corner sharing
+// the bin.)
+struct BinPart {
+  double ta = 0.0, tb = 0.0;
+  double depth = kInf;
+  bool Empty() const { return tb <= ta; }
+};
+
+// Appends the parts of a segment in its bins, first_bin first. Each edge ray between two bins
+// is intersected once: it bounds the part in the bin below and the part in the bin above.
+void AppendBinParts(const Sweep& sweep, const SweptSegment& s, std::vector<BinPart>& parts) {
   const Point2 d = s.b - s.a;
   const bool ccw = s.a.x() * d.y() - s.a.y() * d.x() > 0.0;  // bearing grows with t
-  double t_low = ccw ? s.t0 : s.t1, t_high = ccw ? s.t1 : s.t0;  // t at the lower/upper edge
-  if (const auto hit = Intersect(sweep.EdgeDir(k), s.a, s.b)) t_low = std::clamp(hit->t, s.t0, s.t1);
-  if (const auto hit = Intersect(sweep.EdgeDir(k + 1), s.a, s.b)) t_high = std::clamp(hit->t, s.t0, s.t1);
-  return {std::min(t_low, t_high), std::max(t_low, t_high)};
-}
-
-// Depth of a segment in bin k: the distance of its nearest point within the bin. (Along the
-// centre ray alone, a polyline would hide its own continuation at a corner sharing the bin.)
-double DepthOfPart(const SweptSegment& s, const std::pair<double, double>& part) {
-  const Point2 p0 = s.a + part.first * (s.b - s.a), p1 = s.a + part.second * (s.b - s.a);
-  return std::sqrt(SquaredDistanceToSegment(Point2::Zero(), p0, p1));
+  const double t_low = ccw ? s.t0 : s.t1, t_high = ccw ? s.t1 : s.t0;  // t at the lower/upper edge
+  std::optional<RayHit> lower = Intersect(sweep.EdgeDir(s.first_bin), s.a, s.b);
+  for (int k = s.first_bin; k < s.first_bin + s.num_bins; ++k) {
+    const std::optional<RayHit> upper = Intersect(sweep.EdgeDir(k + 1), s.a, s.b);
+    const double lo = lower ? std::clamp(lower->t, s.t0, s.t1) : t_low;
+    const double hi = upper ? std::clamp(upper->t, s.t0, s.t1) : t_high;
+    BinPart part{std::min(lo, hi), std::max(lo, hi)};
+    if (!part.Empty()) {
+      const Point2 p0 = s.a + part.ta * d, p1 = s.a + part.tb * d;
+      part.depth = std::sqrt(SquaredDistanceToSegment(Point2::Zero(), p0, p1));
+    }
+    parts.push_back(part);
+    lower = upper;
+  }
 }
 
 std::vector<SweptSegment> GatherSegments(
@@ -151,41 +164,58 @@ std::vector<SweptSegment> GatherSegments(
   return out;
 }
 
-// Visible parameter intervals [ta, tb] of a segment, clipped at the bin edge rays.
+// The parts of every segment in its bins: segment i's are parts[begin[i], begin[i + 1]).
+struct SegmentBinParts {
+  std::vector<BinPart> parts;
+  std::vector<std::size_t> begin;
+};
+
+SegmentBinParts BinPartsOf(const Sweep& sweep, const std::vector<SweptSegment>& segments) {
+  SegmentBinParts out;
+  out.begin.reserve(segments.size() + 1);
+  out.begin.push_back(0);
+  for (const SweptSegment& s : segments) {
+    AppendBinParts(sweep, s, out.parts);
+    out.begin.push_back(out.parts.size());
+  }
+  return out;
+}
+
+std::vector<double> BuildZBuffer(const Sweep& sweep, const std::vector<SweptSegment>& segments,
+                                 const SegmentBinParts& bin_parts) {
+  std::vector<double> zbuffer(sweep.bins, kInf);
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    const BinPart* parts = bin_parts.parts.data() + bin_parts.begin[i];
+    for (int j = 0; j < segments[i].num_bins; ++j) {
+      double& z = zbuffer[(segments[i].first_bin + j) % sweep.bins];
+      if (!parts[j].Empty()) z = std::min(z, parts[j].depth);
+    }
+  }
+  return zbuffer;
+}
+
+// Visible parameter intervals [ta, tb] of a segment (its bin parts given), clipped at the bin
+// edge rays, sorted and merged into `merged`; `scratch` is reused storage.
 using Intervals = std::vector<std::pair<double, double>>;
 
-Intervals VisibleIntervals(const Sweep& sweep, const SweptSegment& s,
-                           const std::vector<double>& zbuffer, double tolerance) {
-  Intervals out;
+void VisibleIntervals(const Sweep& sweep, const SweptSegment& s, const BinPart* parts,
+                      const std::vector<double>& zbuffer, double tolerance, Intervals& scratch,
+                      Intervals& merged) {
+  scratch.clear();
   for (int j = 0; j < s.num_bins; ++j) {
-    const int bin = s.first_bin + j;
-    const std::pair<double, double> part = PartInBin(sweep, s, bin);
-    if (part.second <= part.first) continue;
-    if (DepthOfPart(s, part) > zbuffer[bin % sweep.bins] + tolerance) continue;
-    out.push_back(part);
+    if (parts[j].Empty()) continue;
+    if (parts[j].depth > zbuffer[(s.first_bin + j) % sweep.bins] + tolerance) continue;
+    scratch.emplace_back(parts[j].ta, parts[j].tb);
   }
-  std::sort(out.begin(), out.end());
-  Intervals merged;
-  for (const auto& iv : out) {
+  std::sort(scratch.begin(), scratch.end());
+  merged.clear();
+  for (const auto& iv : scratch) {
     if (!merged.empty() && iv.first <= merged.back().second + 1e-9) {
       merged.back().second = std::max(merged.back().second, iv.second);
     } else {
       merged.push_back(iv);
     }
   }
-  return merged;
-}
-
-std::vector<double> BuildZBuffer(const Sweep& sweep, const std::vector<SweptSegment>& segments) {
-  std::vector<double> zbuffer(sweep.bins, kInf);
-  for (const SweptSegment& s : segments) {
-    for (int j = 0; j < s.num_bins; ++j) {
-      double& z = zbuffer[(s.first_bin + j) % sweep.bins];
-      const std::pair<double, double> part = PartInBin(sweep, s, s.first_bin + j);
-      if (part.second > part.first) z = std::min(z, DepthOfPart(s, part));
-    }
-  }
-  return zbuffer;
 }
 
 // Sum of the bearing increments along a polyline (positive: counter-clockwise).
@@ -266,12 +296,15 @@ std::vector<VisiblePolyline> ComputeVisibleShape(
   const Sweep sweep = MakeSweep(params);
   const std::vector<SweptSegment> segments =
       GatherSegments(polylines_map, index, T_map_sensor, params, sweep);
-  const std::vector<double> zbuffer = BuildZBuffer(sweep, segments);
+  const SegmentBinParts bin_parts = BinPartsOf(sweep, segments);
+  const std::vector<double> zbuffer = BuildZBuffer(sweep, segments, bin_parts);
   std::vector<VisiblePolyline> out;
   PieceBuilder builder(params, out);
   PolylineId cumulative_of = 0;
   std::vector<double> cumulative;  // arc length at each vertex of the current source polyline
-  for (const SweptSegment& s : segments) {  // sorted by polyline, then segment
+  Intervals scratch, visible;
+  for (std::size_t n = 0; n < segments.size(); ++n) {  // sorted by polyline, then segment
+    const SweptSegment& s = segments[n];
     if (cumulative.empty() || cumulative_of != s.polyline) {
       const Polyline& p = polylines_map.at(s.polyline);
       cumulative.assign(1, 0.0);
@@ -279,7 +312,9 @@ std::vector<VisiblePolyline> ComputeVisibleShape(
       cumulative_of = s.polyline;
     }
     const double length = (s.b - s.a).norm();
-    for (const auto& [ta, tb] : VisibleIntervals(sweep, s, zbuffer, params.depth_tolerance_m)) {
+    VisibleIntervals(sweep, s, bin_parts.parts.data() + bin_parts.begin[n], zbuffer,
+                     params.depth_tolerance_m, scratch, visible);
+    for (const auto& [ta, tb] : visible) {
       builder.Add(s, cumulative[s.segment], length, ta, tb);
     }
   }

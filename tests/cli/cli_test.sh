@@ -54,9 +54,12 @@ expect 2 "--guess" -- "$BIN" match "$LOG" --scan 0 --to 1 --guess 1 nan 0
 expect 0 "laser scans" -- "$BIN" convert "$LOG" "$WORK/head.rawlog"
 expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/head" --quiet
 for f in trajectory.tum map.polylines map.svg map.png map.pgm map.yaml map.gridmap map.simplemap \
-  stats.json; do
+  scan_times.csv stats.json; do
   [ -s "$WORK/head/$f" ] || fail "run did not write $f"
 done
+[ "$(head -n 1 "$WORK/head/scan_times.csv")" = "scan,timestamp_s,ms" ] || fail "scan_times.csv header"
+[ "$(($(wc -l < "$WORK/head/scan_times.csv") - 1))" = "$(grep -vc "^#" "$WORK/head/trajectory.tum")" ] ||
+  fail "scan_times.csv: not one line per scan"
 head -c 2 "$WORK/head/map.pgm" | grep -q P5 || fail "map.pgm is not a binary PGM"
 grep -qx "image: map.pgm" "$WORK/head/map.yaml" || fail "map.yaml does not name map.pgm"
 grep -qx "resolution: 0.05" "$WORK/head/map.yaml" || fail "map.yaml: default resolution not 0.05"
