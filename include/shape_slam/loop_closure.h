@@ -121,6 +121,11 @@ struct LoopClosureParams {
   /// A loop edge that disagrees with the graph by more than this triggers optimisation.
   double min_correction_m = 0.05;
   double min_correction_rad = 0.01;
+  /// After an optimisation the map is rebuilt from the keyframes only when one of them moved by
+  /// more than this (metres, radians): a smaller shift is below what the map resolves, and the
+  /// rebuild costs a map update per keyframe.
+  double rebuild_min_shift_m = 0.03;
+  double rebuild_min_shift_rad = 0.005;
   PoseGraphParams graph;
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;

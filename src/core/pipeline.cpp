@@ -222,9 +222,19 @@ void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
 }
 
-// Optimises the pose graph, then rebuilds the map from every keyframe at its corrected pose.
+// Optimises the pose graph, then rebuilds the map from every keyframe at its corrected pose
+// (when one moved by more than rebuild_min_shift_*).
 void ShapeSlam::OptimizeAndRebuild() {
+  std::vector<Pose2> before;
+  for (const LoopKeyframe& place : places_) before.push_back(graph_.Node(place.node));
   graph_.Optimize(params_.loop_closure.graph);
+  bool moved = false;
+  for (std::size_t k = 0; k < places_.size() && !moved; ++k) {
+    const Pose2 shift = before[k].Inverse() * graph_.Node(places_[k].node);
+    moved = shift.Translation().norm() > params_.loop_closure.rebuild_min_shift_m ||
+            std::abs(shift.theta) > params_.loop_closure.rebuild_min_shift_rad;
+  }
+  if (!moved) return;  // the map already stands where the keyframes are
   map_.Clear();
   ScanInsertionParams insertion;
   insertion.shapes = params_.shapes;

@@ -157,6 +157,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "sigma_floor_rad", "edge standard deviation at least (rad)", &p.loop_closure.sigma_floor_rad},
       {"loop_closure", "min_correction_m", "optimise when a loop edge disagrees with the graph by more than this (m) ...", &p.loop_closure.min_correction_m},
       {"loop_closure", "min_correction_rad", "... or this (rad)", &p.loop_closure.min_correction_rad},
+      {"loop_closure", "rebuild_min_shift_m", "after optimising, rebuild the map only if a keyframe moved more than this (m) ...", &p.loop_closure.rebuild_min_shift_m},
+      {"loop_closure", "rebuild_min_shift_rad", "... or this (rad)", &p.loop_closure.rebuild_min_shift_rad},
       {"loop_closure", "max_correction_rad", "a closure may turn the estimate by at most this (rad) ...", &p.loop_closure.max_correction_rad},
       {"loop_closure", "max_correction_rad_per_m", "... plus this per metre of pose-graph distance (rad/m)", &p.loop_closure.max_correction_rad_per_m},
       {"loop_closure", "max_correction_m", "... and move it by at most this (m) ...", &p.loop_closure.max_correction_m},
