@@ -188,6 +188,10 @@ class LoopCloser {
  private:
   std::vector<double> GraphDistances(const std::vector<LoopKeyframe>& keyframes,
                                      const PoseGraph& graph, int from) const;
+  std::vector<int> CandidatesAt(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
+                                const std::vector<double>& graph_distance) const;
+  std::optional<LoopClosure> MatchAt(const std::vector<LoopKeyframe>& keyframes,
+                                     const PoseGraph& graph, int old, double graph_distance) const;
   double SearchRadius(double graph_distance_m) const;
   double CorrectionBoundM(double graph_distance_m) const;
   double CorrectionBoundRad(double graph_distance_m) const;
@@ -195,7 +199,7 @@ class LoopCloser {
   LoopClosureParams params_;
   ScanMatchParams match_;
   std::vector<LoopClosure> pending_;
-  mutable int round_robin_ = 0;  // turn of the candidates after the best-ranked one
+  int round_robin_ = 0;  // turn of the candidates after the best-ranked one (Update advances it)
   int num_accepted_ = 0;
   int num_searches_ = 0;
   int num_found_ = 0;

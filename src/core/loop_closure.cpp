@@ -242,9 +242,16 @@ std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& 
 // the old path.
 std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyframes,
                                         const PoseGraph& graph) const {
+  if (keyframes.size() < 2) return {};
+  return CandidatesAt(keyframes, graph,
+                      GraphDistances(keyframes, graph, static_cast<int>(keyframes.size()) - 1));
+}
+
+std::vector<int> LoopCloser::CandidatesAt(const std::vector<LoopKeyframe>& keyframes,
+                                          const PoseGraph& graph,
+                                          const std::vector<double>& graph_distance) const {
   const int current = static_cast<int>(keyframes.size()) - 1;
   if (current < 1) return {};
-  const std::vector<double> graph_distance = GraphDistances(keyframes, graph, current);
   const Pose2 P_now = graph.Node(keyframes[current].node);
   std::vector<std::pair<double, int>> scored;
   for (int k = 0; k < current; ++k) {
@@ -276,7 +283,6 @@ std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyfram
   for (int j = 0; j < std::min(others, params_.max_candidates - 1); ++j) {
     candidates.push_back(places[1 + (round_robin_ + j) % others]);
   }
-  round_robin_ += std::max(1, params_.max_candidates - 1);
   return candidates;
 }
 
@@ -284,10 +290,16 @@ std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& ke
                                              const PoseGraph& graph, int old) const {
   const int current = static_cast<int>(keyframes.size()) - 1;
   if (old < 0 || old >= current) return std::nullopt;
+  return MatchAt(keyframes, graph, old, GraphDistances(keyframes, graph, current)[old]);
+}
+
+std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& keyframes,
+                                               const PoseGraph& graph, int old,
+                                               double graph_distance) const {
+  const int current = static_cast<int>(keyframes.size()) - 1;
   const LoopKeyframe& now = keyframes[current];
   const LoopKeyframe& then = keyframes[old];
   if (now.shapes.coarse.empty() || then.shapes.coarse.empty()) return std::nullopt;
-  const double graph_distance = GraphDistances(keyframes, graph, current)[old];
   const Place place = OldPlace(keyframes, graph, old, params_);
   const double spacing = match_.matcher.alignment.sample_spacing_m;
   const std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
@@ -393,8 +405,12 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
                                 }),
                  pending_.end());
   std::optional<LoopClosure> loop;
-  for (const int old : Candidates(keyframes, graph)) {
-    std::optional<LoopClosure> candidate = Match(keyframes, graph, old);
+  // One Dijkstra per search serves the candidates and their matches.
+  const std::vector<double> graph_distance = GraphDistances(keyframes, graph, current);
+  const std::vector<int> candidates = CandidatesAt(keyframes, graph, graph_distance);
+  if (!candidates.empty()) round_robin_ += std::max(1, params_.max_candidates - 1);
+  for (const int old : candidates) {
+    std::optional<LoopClosure> candidate = MatchAt(keyframes, graph, old, graph_distance[old]);
     if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = candidate;
   }
   if (!loop) return false;

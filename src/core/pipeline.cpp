@@ -253,7 +253,9 @@ void ShapeSlam::Finish() {
   const auto& edges = graph_.Edges();
   if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
     OptimizeAndRebuild();
-    if (!keyframes_.empty()) last_T_map_robot_ = Trajectory().back().pose;
+    if (!anchors_.empty()) {
+      last_T_map_robot_ = KeyframePose(anchors_.back().keyframe) * anchors_.back().T_keyframe_robot;
+    }
   }
 }
 
