@@ -71,7 +71,7 @@ ArgParser MakeParser() {
 struct RunOutput {
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
-  std::size_t matched = 0, keyframes = 0;
+  std::size_t matched = 0, keyframes = 0, fast_tracked = 0;
   int loop_closures = 0, loop_searches = 0, loop_closures_found = 0;
   double processing_s = 0.0;
 };
@@ -88,6 +88,7 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
     out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
     out.matched += report.matched ? 1 : 0;
     out.keyframes += report.keyframe ? 1 : 0;
+    out.fast_tracked += report.fast_track ? 1 : 0;
     progress.Update(i + 1);
   }
   progress.Finish();
@@ -176,6 +177,7 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
       .Value(Percentile({out.scan_ms.end() - tenth, out.scan_ms.end()}, 0.5))
       .EndObject();
   json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(out.keyframes);
+  json.Key("fast_tracked_scans").Value(out.fast_tracked);
   json.Key("matched_fraction").Value(MatchedFraction(out));
   json.Key("low_match_warning").Value(MatchedFraction(out) < kMinMatchedFraction);
   json.Key("loop_closures").Value(out.loop_closures);

@@ -94,6 +94,16 @@ struct LoopClosureParams {
   /// that would correct the graph waits (confirm_within_keyframes keyframes at most) for a
   /// second closure that is consistent with it.
   double strong_inlier_ratio = 0.8;
+  /// The quick check: when the new keyframe fits the old place at the graph's estimate (after
+  /// the quick ICP and the refinement) by at least this fraction, and it passes the verification,
+  /// the closure is taken without shape matching or window search (the graph is already right
+  /// there). Above 1: every candidate gets the full search.
+  double quick_min_fit = 0.85;
+  /// A place where the window search's best pose has a mean likelihood (window_search.h) below
+  /// this is not shape-matched: no pose of the window overlaps it. A match the verification
+  /// accepts (min_inlier_ratio of the scan within 10 cm) scores about 0.5 on the window grid;
+  /// this keeps half of that as margin.
+  double window_min_fit = 0.25;
   int confirm_within_keyframes = 10;
   /// Two closures are consistent when the cycle they form through the graph (old keyframe ->
   /// loop -> new keyframe -> graph -> other new keyframe -> loop -> other old keyframe -> graph
@@ -126,6 +136,10 @@ struct LoopClosureParams {
   /// rebuild costs a map update per keyframe.
   double rebuild_min_shift_m = 0.03;
   double rebuild_min_shift_rad = 0.005;
+  /// The map as it stood after every this many keyframes is kept (a copy), so that a rebuild
+  /// starts from the last such copy before the first keyframe that moved instead of from an
+  /// empty map: keyframes before a closed loop hardly move. 0 keeps none (rebuild from scratch).
+  int rebuild_checkpoint_every = 64;
   PoseGraphParams graph;
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;

@@ -111,6 +111,13 @@ struct ShapeSlamParams {
   double new_territory_distance_m = 1.0;
   /// A match is trusted when at least this fraction of the scan lies on the map afterwards.
   double min_inlier_ratio = 0.30;
+  /// Fast track (not in the paper): the prediction (odometry, or constant velocity without it)
+  /// is first finished by the quick ICP and refined alone; when the scan then fits the model at
+  /// least this well (fraction of it within matcher.inlier_distance_m) and the estimate passes
+  /// the same gates, it is taken without shape matching. Shape matching would find the same pose
+  /// (ties go to the estimate nearest the prediction); it is for the scans the prediction does
+  /// not explain: large odometry errors, no odometry on a turn, revisits. Above 1: off.
+  double fast_track_min_fit = 0.85;
   /// Cell size of the map's spatial index, metres.
   double index_cell_size_m = 2.0;
   /// Scan-to-scan registration without a guess (scan_matcher.h: `shape-slam match`, the MRPT
@@ -155,6 +162,7 @@ struct ScanReport {
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();  ///< of (x, y, theta), when matched
   bool matched = false;              ///< the pose comes from a trusted match (else prediction)
   bool keyframe = false;             ///< the map was updated with this scan
+  bool fast_track = false;           ///< matched by the fast track (fast_track_min_fit)
   bool used_odometry = false;        ///< the prediction used odometry
   int matched_pairs = 0;             ///< correspondences of eq. (4)
   int polylines = 0;                 ///< polylines extracted from the scan
@@ -212,6 +220,12 @@ class ShapeSlam {
   struct Keyframe {
     LaserScan scan;                      // counter-clockwise beams
     bool trusted = false;                // its pose was confirmed by a match
+    Pose2 T_map_robot_in_map;            // where the map holds its scan (inserted at this pose)
+  };
+  // The map as it stood once the first `keyframes` keyframes were in it.
+  struct MapCheckpoint {
+    int keyframes = 0;
+    PolylineMap map;
   };
   struct ScanAnchor {
     double timestamp_s = 0.0;
@@ -228,11 +242,14 @@ class ShapeSlam {
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
                    const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
   void OptimizeAndRebuild();
+  void RebuildFrom(int first_moved);
+  void CheckpointMap(int keyframes);
 
   ShapeSlamParams params_;
   PolylineMap map_;
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;
+  std::vector<MapCheckpoint> checkpoints_;  // increasing keyframes
   std::vector<LoopKeyframe> places_;  // the keyframes' shapes, node and travel (same order)
   LoopCloser loop_closer_;
   std::vector<ScanAnchor> anchors_;

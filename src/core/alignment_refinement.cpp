@@ -7,6 +7,7 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <cmath>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -156,7 +157,11 @@ SolveOutcome Solve(const std::vector<Association>& associations,
   LossBank loss_bank(params);
   ceres::Problem::Options problem_options;
   problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
   problem_options.disable_all_safety_checks = true;
+  // The costs outlive the problem, which does not own them.
+  std::deque<internal::PointToSegmentCost> sample_costs;  // stable addresses, few allocations
+  std::unique_ptr<ceres::CostFunction> prior_cost;
   ceres::Problem problem(problem_options);
   std::vector<ceres::CostFunction*> costs;
   std::vector<ceres::LossFunction*> losses;
@@ -164,14 +169,14 @@ SolveOutcome Solve(const std::vector<Association>& associations,
   losses.reserve(associations.size());
   for (const Association& a : associations) {
     const ModelSegment& s = segments[static_cast<std::size_t>(a.segment)];
-    costs.push_back(internal::PointToSegmentCost::Create(a.sample_scan, s.a - origin,
-                                                         s.b() - origin, params.point_sigma_m));
+    costs.push_back(&sample_costs.emplace_back(a.sample_scan, s.a - origin, s.b() - origin,
+                                               params.point_sigma_m));
     losses.push_back(loss_bank.For(a.weight));
     problem.AddResidualBlock(costs.back(), losses.back(), pose);
   }
   if (prior) {
-    problem.AddResidualBlock(internal::PosePriorCost::Create(prior->mean, prior->sqrt_information),
-                             nullptr, pose);
+    prior_cost.reset(internal::PosePriorCost::Create(prior->mean, prior->sqrt_information));
+    problem.AddResidualBlock(prior_cost.get(), nullptr, pose);
   }
   ceres::Solver::Summary summary;
   ceres::Solve(SolverOptions(params), &problem, &summary);

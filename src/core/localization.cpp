@@ -158,11 +158,17 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     return prior ? WithinPrior(T, *prior, params.max_prior_mahalanobis)
                  : WithinMotionBound(T, growth, params);
   };
+  // The visible map as shape matching sees it, derived only when shape matching runs.
+  std::vector<Polyline> map_coarse = model.map_coarse;
   const auto localize = [&](const ShapeMatcherParams& matcher, double window_scale) {
     ShapeSlamParams p = params;
     p.matcher = matcher;
     std::vector<Pose2> candidates;
-    for (const auto& [shape_model, cyclic] : {std::pair{&model.map_coarse, model.map_cyclic},
+    if (map_coarse.empty()) {
+      for (const Polyline& m : model.map) map_coarse.push_back(ForShapeMatching(m, params.shapes));
+    }
+    const std::vector<Polyline>& visible_coarse = map_coarse;
+    for (const auto& [shape_model, cyclic] : {std::pair{&visible_coarse, model.map_cyclic},
                                               std::pair{&model.recent_coarse, false}}) {
       if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, p,
                                   loc.matched_pairs)) {
@@ -195,8 +201,24 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     loc.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
     loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
   };
+  // The fast track: the prediction alone, refined; shape matching only when it falls short.
+  const Pose2 predicted = guess.value_or(velocity_hint.value_or(Pose2()));
+  const std::vector<RankedCandidate> fast = selector.Rank(samples, {predicted}, reference, accept);
+  if (!fast.empty() && fast.front().fit >= params.fast_track_min_fit) {
+    const RefinementResult refined = RefineAlignment(samples, all, fast.front().T_model_scan,
+                                                     prior ? prior : motion_prior, params.refinement);
+    const double fit = refined.converged ? selector.Fit(samples, refined.T_map_scan) : 0.0;
+    if (fit >= params.fast_track_min_fit && accept(refined.T_map_scan)) {
+      loc.correction = refined.T_map_scan;
+      loc.covariance = refined.covariance;
+      loc.rms_error_m = refined.rms_error_m;
+      loc.inlier_ratio = fit;
+      loc.trusted = fit >= params.min_inlier_ratio;
+      loc.fast_track = true;
+    }
+  }
   const bool window_now = !odometry_delta && params.window_search_without_odometry;
-  localize(params.matcher, window_now ? growth : 0.0);
+  if (!loc.fast_track) localize(params.matcher, window_now ? growth : 0.0);
   // A scan that found no trusted match tries again: without odometry with as many seed pairs
   // as scan-to-scan matching uses (scan_match_*), with odometry with the window search around
   // the prediction (window_search_fallback). Needed only for the odd scan.

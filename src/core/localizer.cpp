@@ -98,7 +98,6 @@ internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
   for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility)) {
     model.map.push_back(v.points_sensor);
   }
-  for (const Polyline& poly : model.map) model.map_coarse.push_back(ForShapeMatching(poly, p.shapes));
   model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
   return model;
 }

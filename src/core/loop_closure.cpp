@@ -134,6 +134,8 @@ void LoopClosureParams::Validate() const {
   NonNegative(view_angle_per_m, "LoopClosureParams::view_angle_per_m");
   Positive(max_match_sigma_m, "LoopClosureParams::max_match_sigma_m");
   Fraction(strong_inlier_ratio, "LoopClosureParams::strong_inlier_ratio");
+  NonNegative(quick_min_fit, "LoopClosureParams::quick_min_fit");
+  Fraction(window_min_fit, "LoopClosureParams::window_min_fit");
   Positive(search_radius_m, "LoopClosureParams::search_radius_m");
   NonNegative(search_radius_per_m, "LoopClosureParams::search_radius_per_m");
   if (!(max_search_radius_m >= search_radius_m) || !std::isfinite(max_search_radius_m)) {
@@ -147,6 +149,9 @@ void LoopClosureParams::Validate() const {
   NonNegative(min_correction_rad, "LoopClosureParams::min_correction_rad");
   NonNegative(rebuild_min_shift_m, "LoopClosureParams::rebuild_min_shift_m");
   NonNegative(rebuild_min_shift_rad, "LoopClosureParams::rebuild_min_shift_rad");
+  if (rebuild_checkpoint_every < 0) {
+    throw std::invalid_argument("LoopClosureParams::rebuild_checkpoint_every must be >= 0");
+  }
   Positive(max_correction_rad, "LoopClosureParams::max_correction_rad");
   NonNegative(max_correction_rad_per_m, "LoopClosureParams::max_correction_rad_per_m");
   if (confirm_within_keyframes < 1) {
@@ -306,13 +311,67 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   const std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
   if (samples.empty() || place_samples.empty()) return std::nullopt;
 
-  // Candidates: the estimate, the shape match with it as guess and the one without (§4.3), and
-  // the window search's best poses over the whole place.
   const Pose2 estimate = SensorPose(keyframes, graph, old).Inverse() * SensorPose(keyframes, graph, current);
-  std::vector<Pose2> candidates = {estimate};
-  for (const std::optional<Pose2>& guess : {std::optional<Pose2>(estimate), std::optional<Pose2>()}) {
-    if (auto c = ShapeCandidate(now.shapes, place.coarse, guess, estimate, match_)) candidates.push_back(*c);
+  CandidateSelectionParams selection = match_.selection;
+  selection.capture_distance_m = match_.coarse_gate_m;
+  selection.inlier_distance_m = match_.matcher.inlier_distance_m;
+  const CandidateSelector selector(place.fine, selection);
+  const internal::SegmentGrid scan_grid(internal::MakeModelSegments(now.shapes.fine),
+                                        match_.matcher.inlier_distance_m);
+  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    RefinementResult refined = internal::RefineAgainstMap(samples, place.fine, c.T_model_scan,
+                                                          std::nullopt, match_.refinement,
+                                                          match_.coarse_gate_m);
+    if (!refined.converged) return std::nullopt;
+    return refined;
+  };
+  const auto verified = [&](const RefinementResult& refined) -> std::optional<LoopClosure> {
+    // Verification: both sides explain each other ...
+    LoopClosure loop;
+    loop.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
+    std::vector<Point2> place_in_scan;
+    const PointTransform T_scan_old(refined.T_map_scan.Inverse());
+    for (const Point2& q : place_samples) place_in_scan.push_back(T_scan_old(q));
+    loop.reverse_inlier_ratio = VisibleInlierRatio(place_in_scan, samples, scan_grid);
+    if (loop.inlier_ratio < params_.min_inlier_ratio ||
+        loop.reverse_inlier_ratio < params_.min_reverse_inlier_ratio) {
+      return std::nullopt;
+    }
+    // ... the match constrains every direction (not along a featureless corridor) ...
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(refined.covariance.topLeftCorner<2, 2>());
+    if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > params_.max_match_sigma_m) {
+      return std::nullopt;
+    }
+    // ... and the correction lies within the uncertainty (drift is bounded; a corridor turned
+    // by 180 deg, a parallel corridor far off are not).
+    const Pose2 T_old_now = graph.Node(then.node).Inverse() * graph.Node(now.node);
+    loop.edge = {then.node, now.node,
+                 then.T_robot_sensor * refined.T_map_scan * now.T_robot_sensor.Inverse(),
+                 EdgeCovariance(refined.covariance, params_), true};
+    loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
+    loop.old_keyframe = old;
+    loop.new_keyframe = current;
+    loop.graph_distance_m = graph_distance;
+    if (std::abs(loop.correction.theta) > CorrectionBoundRad(graph_distance) ||
+        loop.correction.Translation().norm() > CorrectionBoundM(graph_distance)) {
+      return std::nullopt;
+    }
+    return loop;
+  };
+
+  // The quick check (not in the paper): where the graph is already right -- a place revisited
+  // after its loop was closed -- the estimate itself fits; it is taken when the scan fits the
+  // place at least quick_min_fit, without shape matching or window search.
+  const std::vector<RankedCandidate> quick = selector.Rank(samples, {estimate}, estimate);
+  if (!quick.empty() && quick.front().fit >= params_.quick_min_fit) {
+    if (const std::optional<RefinementResult> refined = refine(quick.front())) {
+      std::optional<LoopClosure> loop = verified(*refined);
+      if (loop && loop->inlier_ratio >= params_.quick_min_fit) return loop;
+    }
   }
+
+  // The window search over the whole place first: where it finds no pose at which the scan
+  // overlaps the place at all, no candidate could pass the verification.
   const double bound_m = CorrectionBoundM(graph_distance);
   WindowSearchParams window = match_.window_search;
   window.resolution_m = params_.window_resolution_m;
@@ -324,59 +383,23 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   const WindowSearch search(place.fine, window);
   const std::vector<Point2> coarse_samples =
       internal::Thinned(samples, spacing, match_.window_search_spacing_m);
-  for (const WindowHypothesis& h : search.Search(coarse_samples, centre)) {
-    candidates.push_back(h.T_model_scan);
+  const std::vector<WindowHypothesis> hypotheses = search.Search(coarse_samples, centre);
+  double best_window_fit = 0.0;
+  for (const WindowHypothesis& h : hypotheses) best_window_fit = std::max(best_window_fit, h.fit);
+  if (best_window_fit < params_.window_min_fit) return std::nullopt;
+  // Candidates: the estimate, the shape match with it as guess and the one without (§4.3), and
+  // the window search's best poses.
+  std::vector<Pose2> candidates = {estimate};
+  for (const std::optional<Pose2>& guess : {std::optional<Pose2>(estimate), std::optional<Pose2>()}) {
+    if (auto c = ShapeCandidate(now.shapes, place.coarse, guess, estimate, match_)) candidates.push_back(*c);
   }
-  CandidateSelectionParams selection = match_.selection;
-  selection.capture_distance_m = match_.coarse_gate_m;
-  selection.inlier_distance_m = match_.matcher.inlier_distance_m;
-  const CandidateSelector selector(place.fine, selection);
+  for (const WindowHypothesis& h : hypotheses) candidates.push_back(h.T_model_scan);
   // Among fits that explain the scan about equally well the one nearest the estimate wins:
   // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
-  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
-    RefinementResult refined = internal::RefineAgainstMap(samples, place.fine, c.T_model_scan,
-                                                          std::nullopt, match_.refinement,
-                                                          match_.coarse_gate_m);
-    if (!refined.converged) return std::nullopt;
-    return refined;
-  };
   const auto selected = SelectRefined<RefinementResult>(selector.Rank(samples, candidates, estimate),
                                                         selection.max_refinements, refine);
-  const RefinementResult& refined = selected->second;
-
-  // Verification: both sides explain each other ...
-  LoopClosure loop;
-  loop.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
-  const internal::SegmentGrid scan_grid(internal::MakeModelSegments(now.shapes.fine),
-                                        match_.matcher.inlier_distance_m);
-  std::vector<Point2> place_in_scan;
-  const PointTransform T_scan_old(refined.T_map_scan.Inverse());
-  for (const Point2& q : place_samples) place_in_scan.push_back(T_scan_old(q));
-  loop.reverse_inlier_ratio = VisibleInlierRatio(place_in_scan, samples, scan_grid);
-  if (loop.inlier_ratio < params_.min_inlier_ratio ||
-      loop.reverse_inlier_ratio < params_.min_reverse_inlier_ratio) {
-    return std::nullopt;
-  }
-  // ... the match constrains every direction (not along a featureless corridor) ...
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(refined.covariance.topLeftCorner<2, 2>());
-  if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > params_.max_match_sigma_m) {
-    return std::nullopt;
-  }
-  // ... and the correction lies within the uncertainty (drift is bounded; a corridor turned
-  // by 180 deg, a parallel corridor far off are not).
-  const Pose2 T_old_now = graph.Node(then.node).Inverse() * graph.Node(now.node);
-  loop.edge = {then.node, now.node,
-               then.T_robot_sensor * refined.T_map_scan * now.T_robot_sensor.Inverse(),
-               EdgeCovariance(refined.covariance, params_), true};
-  loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
-  loop.old_keyframe = old;
-  loop.new_keyframe = current;
-  loop.graph_distance_m = graph_distance;
-  if (std::abs(loop.correction.theta) > CorrectionBoundRad(graph_distance) ||
-      loop.correction.Translation().norm() > CorrectionBoundM(graph_distance)) {
-    return std::nullopt;
-  }
-  return loop;
+  if (!selected) return std::nullopt;
+  return verified(selected->second);
 }
 
 // The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the

@@ -75,6 +75,9 @@ void ShapeSlamParams::Validate() const {
   Positive(index_cell_size_m, "ShapeSlamParams::index_cell_size_m");
   Positive(coarse_gate_m, "ShapeSlamParams::coarse_gate_m");
   Positive(new_territory_distance_m, "ShapeSlamParams::new_territory_distance_m");
+  if (!(fast_track_min_fit >= 0.0) || std::isnan(fast_track_min_fit)) {
+    throw std::invalid_argument("ShapeSlamParams::fast_track_min_fit must be >= 0 (above 1: off)");
+  }
   if (!(max_untrusted_coverage >= 0.0 && max_untrusted_coverage <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
@@ -218,35 +221,57 @@ void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
     edge->to = node;
     graph_.AddEdge(*edge);
   }
-  keyframes_.push_back({scan, trusted});
+  keyframes_.push_back({scan, trusted, T_map_robot});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
 }
 
-// Optimises the pose graph, then rebuilds the map from every keyframe at its corrected pose
-// (when one moved by more than rebuild_min_shift_*).
+// Optimises the pose graph, then rebuilds the map from the keyframes at their corrected poses
+// when one of them moved by more than rebuild_min_shift_* from where the map holds it. The
+// rebuild starts from the last checkpoint before the first keyframe that moved: keyframes
+// before a closed loop keep their poses, and so does their part of the map.
 void ShapeSlam::OptimizeAndRebuild() {
-  std::vector<Pose2> before;
-  for (const LoopKeyframe& place : places_) before.push_back(graph_.Node(place.node));
   graph_.Optimize(params_.loop_closure.graph);
-  bool moved = false;
-  for (std::size_t k = 0; k < places_.size() && !moved; ++k) {
-    const Pose2 shift = before[k].Inverse() * graph_.Node(places_[k].node);
-    moved = shift.Translation().norm() > params_.loop_closure.rebuild_min_shift_m ||
-            std::abs(shift.theta) > params_.loop_closure.rebuild_min_shift_rad;
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    const Pose2 shift = keyframes_[k].T_map_robot_in_map.Inverse() * graph_.Node(places_[k].node);
+    if (shift.Translation().norm() > params_.loop_closure.rebuild_min_shift_m ||
+        std::abs(shift.theta) > params_.loop_closure.rebuild_min_shift_rad) {
+      RebuildFrom(static_cast<int>(k));
+      return;
+    }
   }
-  if (!moved) return;  // the map already stands where the keyframes are
-  map_.Clear();
+}
+
+void ShapeSlam::RebuildFrom(int first_moved) {
+  while (!checkpoints_.empty() && checkpoints_.back().keyframes > first_moved) checkpoints_.pop_back();
+  int start = 0;
+  if (checkpoints_.empty()) {
+    map_.Clear();
+  } else {
+    map_ = checkpoints_.back().map;
+    start = checkpoints_.back().keyframes;
+  }
   ScanInsertionParams insertion;
   insertion.shapes = params_.shapes;
   insertion.visibility = params_.visibility;
   insertion.visibility_fov_margin_rad = params_.visibility_fov_margin_rad;
   insertion.map_update = params_.map_update;
-  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    const Keyframe& kf = keyframes_[k];
-    const Pose2 T_map_sensor = graph_.Node(places_[k].node) * kf.scan.T_robot_sensor;
+  for (std::size_t k = start; k < keyframes_.size(); ++k) {
+    Keyframe& kf = keyframes_[k];
+    kf.T_map_robot_in_map = graph_.Node(places_[k].node);
+    const Pose2 T_map_sensor = kf.T_map_robot_in_map * kf.scan.T_robot_sensor;
     InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor, kf.trusted || map_.Empty(),
                      insertion);
+    CheckpointMap(static_cast<int>(k) + 1);
   }
+}
+
+// Keeps a copy of the map holding the first `keyframes` keyframes, every
+// rebuild_checkpoint_every keyframes.
+void ShapeSlam::CheckpointMap(int keyframes) {
+  const int every = params_.loop_closure.rebuild_checkpoint_every;
+  if (every <= 0 || keyframes % every != 0) return;
+  if (!checkpoints_.empty() && checkpoints_.back().keyframes >= keyframes) return;
+  checkpoints_.push_back({keyframes, map_});
 }
 
 void ShapeSlam::Finish() {
@@ -288,7 +313,6 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     visible = map_.Visible(T_map_sensor_pred, visibility);
     internal::LocalModel model;
     for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
-    for (const Polyline& p : model.map) model.map_coarse.push_back(ForShapeMatching(p, params_.shapes));
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
     if (params_.use_last_keyframe && !keyframes_.empty()) {
       const LoopKeyframe& last = places_.back();
@@ -309,6 +333,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
+  report.fast_track = loc.fast_track;
   lost_scans_ = loc.trusted || map_.Empty() ? 0 : lost_scans_ + 1;
   if (last_T_map_robot_) {
     recent_motions_.push_back(last_T_map_robot_->Inverse() * report.T_map_robot);
@@ -339,6 +364,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     report.keyframe = true;
     AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), report.T_map_robot,
                 trusted, loc.covariance);
+    CheckpointMap(static_cast<int>(keyframes_.size()));
     if (loop_closer_.Update(places_, graph_)) {
       OptimizeAndRebuild();
       report.T_map_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);

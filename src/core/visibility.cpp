@@ -36,7 +36,7 @@ struct Sweep {
   }
 };
 
-Sweep MakeSweep(const VisibilityParams& params) {
+Sweep BuildSweep(const VisibilityParams& params) {
   Sweep s;
   s.full_circle = params.fov_rad >= 2.0 * M_PI - 1e-9;
   const double fov = s.full_circle ? 2.0 * M_PI : params.fov_rad;
@@ -51,6 +51,19 @@ Sweep MakeSweep(const VisibilityParams& params) {
     s.centre_dir.emplace_back(std::cos(phi), std::sin(phi));
   }
   return s;
+}
+
+// The sweep of the last field of view and resolution asked for in this thread: scans of one
+// sensor share them, and the direction tables cost two sincos per bin.
+const Sweep& MakeSweep(const VisibilityParams& params) {
+  thread_local Sweep cached;
+  thread_local double cached_fov = -1.0, cached_resolution = -1.0;
+  if (params.fov_rad != cached_fov || params.angular_resolution_rad != cached_resolution) {
+    cached = BuildSweep(params);
+    cached_fov = params.fov_rad;
+    cached_resolution = params.angular_resolution_rad;
+  }
+  return cached;
 }
 
 // Distance along the ray of bearing phi from the origin to the line through a, b, and the
@@ -293,7 +306,7 @@ std::vector<VisiblePolyline> ComputeVisibleShape(
     const std::unordered_map<PolylineId, Polyline>& polylines_map, const SegmentIndex& index,
     const Pose2& T_map_sensor, const VisibilityParams& params) {
   params.Validate();
-  const Sweep sweep = MakeSweep(params);
+  const Sweep& sweep = MakeSweep(params);
   const std::vector<SweptSegment> segments =
       GatherSegments(polylines_map, index, T_map_sensor, params, sweep);
   const SegmentBinParts bin_parts = BinPartsOf(sweep, segments);

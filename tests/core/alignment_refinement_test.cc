@@ -109,7 +109,7 @@ TEST(PointToSegmentCostTest, DistanceToLineBetweenEndsAndToEndPointsBeyond) {
   EXPECT_NEAR(Evaluate(*point, identity).residual.norm(), 5.0, 1e-12);
 }
 
-TEST(PointToSegmentCostTest, AutodiffJacobianMatchesFiniteDifferences) {
+TEST(PointToSegmentCostTest, JacobianMatchesFiniteDifferences) {
   std::mt19937 prng(42);
   std::uniform_real_distribution<double> u(-3.0, 3.0);
   for (int trial = 0; trial < 50; ++trial) {

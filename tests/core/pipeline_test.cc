@@ -117,6 +117,70 @@ TEST(PipelineTest, FinishOptimisesAndRebuildsTheMap) {
   EXPECT_TRUE(more.matched);
 }
 
+// The fast track: where the odometry prediction fits, the scan is placed without shape matching,
+// as accurately; where the prediction is off by more than the quick ICP captures, shape matching
+// takes over. Above 1 the fast track is off.
+TEST(PipelineTest, FastTrackPlacesTheScansThePredictionExplains) {
+  SimRun run = Simulate(6);
+  const auto fast_tracked = [](const SimRun& r, const ShapeSlamParams& params, double& ate) {
+    ShapeSlam slam(params);
+    int fast = 0;
+    for (const LaserScan& scan : r.scans) fast += slam.Process(scan).fast_track ? 1 : 0;
+    ate = EvaluateTrajectory(slam.Trajectory(), r.truth, {}).ate_rmse_m;
+    return fast;
+  };
+  ShapeSlamParams off;
+  off.fast_track_min_fit = 1.5;
+  double ate_on = 0.0, ate_off = 0.0;
+  const int on_count = fast_tracked(run, ShapeSlamParams{}, ate_on);
+  EXPECT_EQ(fast_tracked(run, off, ate_off), 0);
+  EXPECT_GT(on_count, static_cast<int>(run.scans.size()) / 2);
+  EXPECT_LT(ate_on, 0.05);
+  EXPECT_LT(ate_off, 0.05);
+  // Odometry that turns by 0.3 rad too much at one scan (a wheel slip): that scan cannot be
+  // fast-tracked from the prediction, shape matching places it, and the trajectory stays right.
+  const std::size_t slip = run.scans.size() / 3;
+  const Pose2 before_slip = *run.scans[slip - 1].T_odom_robot;
+  for (std::size_t i = slip; i < run.scans.size(); ++i) {
+    *run.scans[i].T_odom_robot =
+        before_slip * Pose2(0.0, 0.0, 0.3) * (before_slip.Inverse() * *run.scans[i].T_odom_robot);
+  }
+  ShapeSlam slam;
+  std::vector<ScanReport> reports;
+  for (const LaserScan& scan : run.scans) reports.push_back(slam.Process(scan));
+  EXPECT_FALSE(reports[slip].fast_track);
+  EXPECT_TRUE(reports[slip].matched);
+  EXPECT_LT(EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m, 0.05);
+}
+
+// A rebuild after loop closure starts from the last map checkpoint before the first keyframe
+// that moved: the trajectory agrees with the one rebuilt from an empty map every time.
+TEST(PipelineTest, RebuildFromCheckpointsAgreesWithRebuildFromScratch) {
+  const SimRun run = Simulate(5);
+  ShapeSlamParams scratch, every_keyframe;
+  scratch.loop_closure.rebuild_checkpoint_every = 0;
+  every_keyframe.loop_closure.rebuild_checkpoint_every = 1;
+  ShapeSlam a(scratch), b(every_keyframe);
+  for (const LaserScan& scan : run.scans) a.Process(scan), b.Process(scan);
+  a.Finish();
+  b.Finish();
+  ASSERT_GT(b.NumLoopClosures(), 0);
+  const std::vector<StampedPose> ta = a.Trajectory(), tb = b.Trajectory();
+  ASSERT_EQ(ta.size(), tb.size());
+  double worst = 0.0;
+  for (std::size_t i = 0; i < ta.size(); ++i) {
+    worst = std::max(worst, (ta[i].pose.Translation() - tb[i].pose.Translation()).norm());
+  }
+  EXPECT_LT(worst, 0.05);
+  EXPECT_LT(EvaluateTrajectory(tb, run.truth, {}).ate_rmse_m, 0.05);
+  ShapeSlamParams invalid;
+  invalid.loop_closure.rebuild_checkpoint_every = -1;
+  EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
+  invalid = ShapeSlamParams{};
+  invalid.fast_track_min_fit = -0.1;
+  EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
+}
+
 TEST(PipelineTest, IsDeterministic) {
   const SimRun run = Simulate(2);
   const Outcome a = Map(run, ShapeSlamParams{});

@@ -38,7 +38,9 @@ double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
 /// What a scan is localized against, in the sensor frame of the prediction.
 struct LocalModel {
   std::vector<Polyline> map;            ///< visible map shape, CCW ordered
-  std::vector<Polyline> map_coarse;     ///< the same, as shape matching sees it
+  /// The same, as shape matching sees it; left empty, Localize derives it (ForShapeMatching)
+  /// only if shape matching runs (not for a scan the fast track places).
+  std::vector<Polyline> map_coarse;
   bool map_cyclic = false;
   std::vector<Polyline> recent_coarse;  ///< last keyframe's polylines (shape matching)
   std::vector<Polyline> recent_fine;    ///< the same, finer (refinement)
@@ -53,6 +55,7 @@ struct Localization {
   double inlier_ratio = 0.0;
   double rms_error_m = 0.0;
   double coverage = 0.0;  ///< fraction of the scan within new_territory_distance_m of the model
+  bool fast_track = false;  ///< taken from the prediction without shape matching
 };
 
 /// Candidates from shape matching against the map and against the last keyframe, the

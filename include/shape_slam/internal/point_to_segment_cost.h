@@ -2,7 +2,9 @@
 // Ceres refinement of the alignment (alignment_refinement.h).
 #pragma once
 
-#include <ceres/autodiff_cost_function.h>
+#include <ceres/sized_cost_function.h>
+
+#include <cmath>
 
 #include "shape_slam/types.h"
 
@@ -19,38 +21,12 @@ namespace shape_slam::internal {
 /// handle that kink without trouble, unlike a scalar distance whose square root is singular on
 /// the segment. A segment with a == b is a point (r = (q - a) / sigma in an arbitrary frame).
 /// Parameters: pose = {x (m), y (m), theta (rad)} of T_map_scan.
-class PointToSegmentCost {
+/// The Jacobian is analytic (one cost per sample and per solve: autodiff's jets and its two
+/// allocations per cost were a measurable part of every refinement).
+class PointToSegmentCost final : public ceres::SizedCostFunction<2, 3> {
  public:
   static constexpr int kNumResiduals = 2;
 
-  static ceres::CostFunction* Create(const Point2& sample_scan, const Point2& a_map,
-                                     const Point2& b_map, double sigma_m) {
-    return new ceres::AutoDiffCostFunction<PointToSegmentCost, kNumResiduals, 3>(
-        new PointToSegmentCost(sample_scan, a_map, b_map, sigma_m));
-  }
-
-  template <typename T>
-  bool operator()(const T* const pose, T* residual) const {
-    using std::cos;
-    using std::sin;
-    const T c = cos(pose[2]), s = sin(pose[2]);
-    // The sample in the map frame, relative to a.
-    const T dx = c * sample_.x() - s * sample_.y() + pose[0] - a_.x();
-    const T dy = s * sample_.x() + c * sample_.y() + pose[1] - a_.y();
-    const T along = dx * direction_.x() + dy * direction_.y();
-    const T across = dy * direction_.x() - dx * direction_.y();
-    T excess = T(0.0);
-    if (along < T(0.0)) {
-      excess = along;
-    } else if (along > T(length_)) {
-      excess = along - T(length_);
-    }
-    residual[0] = across * inv_sigma_;
-    residual[1] = excess * inv_sigma_;
-    return true;
-  }
-
- private:
   PointToSegmentCost(const Point2& sample_scan, const Point2& a_map, const Point2& b_map,
                      double sigma_m)
       : sample_(sample_scan),
@@ -60,6 +36,40 @@ class PointToSegmentCost {
     direction_ = length_ > 0.0 ? Point2((b_map - a_map) / length_) : Point2(1.0, 0.0);
   }
 
+  /// A new cost (the caller or the ceres::Problem owns it).
+  static ceres::CostFunction* Create(const Point2& sample_scan, const Point2& a_map,
+                                     const Point2& b_map, double sigma_m) {
+    return new PointToSegmentCost(sample_scan, a_map, b_map, sigma_m);
+  }
+
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    const double* pose = parameters[0];
+    const double c = std::cos(pose[2]), s = std::sin(pose[2]);
+    // The sample rotated into the map frame, and relative to a once shifted.
+    const double rx = c * sample_.x() - s * sample_.y(), ry = s * sample_.x() + c * sample_.y();
+    const double dx = rx + pose[0] - a_.x(), dy = ry + pose[1] - a_.y();
+    const double ux = direction_.x(), uy = direction_.y();
+    const double along = dx * ux + dy * uy;
+    const double across = dy * ux - dx * uy;
+    const bool before = along < 0.0, after = along > length_;
+    const double excess = before ? along : (after ? along - length_ : 0.0);
+    residuals[0] = across * inv_sigma_;
+    residuals[1] = excess * inv_sigma_;
+    if (jacobians == nullptr || jacobians[0] == nullptr) return true;
+    // d(rotated sample)/d(theta) = (-ry, rx).
+    double* J = jacobians[0];  // row-major 2 x 3
+    J[0] = -uy * inv_sigma_;
+    J[1] = ux * inv_sigma_;
+    J[2] = (rx * ux + ry * uy) * inv_sigma_;
+    const double on = before || after ? inv_sigma_ : 0.0;
+    J[3] = ux * on;
+    J[4] = uy * on;
+    J[5] = (-ry * ux + rx * uy) * on;
+    return true;
+  }
+
+ private:
   Point2 sample_;     // scan frame, m
   Point2 a_;          // map frame, m
   Point2 direction_;  // unit vector from a to b (x axis for a point)
