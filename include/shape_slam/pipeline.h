@@ -225,7 +225,7 @@ class ShapeSlam {
   // The map as it stood once the first `keyframes` keyframes were in it.
   struct MapCheckpoint {
     int keyframes = 0;
-    PolylineMap map;
+    PolylineMap::Snapshot map;
   };
   struct ScanAnchor {
     double timestamp_s = 0.0;

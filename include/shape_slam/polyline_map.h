@@ -5,6 +5,7 @@
 
 #include <cstddef>
 #include <unordered_map>
+#include <utility>
 #include <vector>
 
 #include "shape_slam/spatial_index.h"
@@ -45,6 +46,14 @@ class PolylineMap {
   /// The visible map shape from a sensor pose (§3, §4): CCW ordered visible parts, sensor frame.
   std::vector<VisiblePolyline> Visible(const Pose2& T_map_sensor,
                                        const VisibilityParams& params) const;
+
+  /// The polylines with their ids, increasing: all that Restore needs (a third of the memory of
+  /// a copy of the map, which also holds the index).
+  using Snapshot = std::vector<std::pair<PolylineId, MapPolyline>>;
+  Snapshot TakeSnapshot() const;
+  /// Replaces the content by a snapshot, ids kept (ids added later still follow every id used
+  /// before). Throws std::invalid_argument like Add.
+  void Restore(const Snapshot& snapshot);
 
   bool Empty() const { return polylines_.empty(); }
   std::size_t NumPolylines() const { return polylines_.size(); }

@@ -247,7 +247,7 @@ void ShapeSlam::RebuildFrom(int first_moved) {
   if (checkpoints_.empty()) {
     map_.Clear();
   } else {
-    map_ = checkpoints_.back().map;
+    map_.Restore(checkpoints_.back().map);
     start = checkpoints_.back().keyframes;
   }
   ScanInsertionParams insertion;
@@ -271,7 +271,7 @@ void ShapeSlam::CheckpointMap(int keyframes) {
   const int every = params_.loop_closure.rebuild_checkpoint_every;
   if (every <= 0 || keyframes % every != 0) return;
   if (!checkpoints_.empty() && checkpoints_.back().keyframes >= keyframes) return;
-  checkpoints_.push_back({keyframes, map_});
+  checkpoints_.push_back({keyframes, map_.TakeSnapshot()});
 }
 
 void ShapeSlam::Finish() {

@@ -61,6 +61,25 @@ void PolylineMap::Clear() {
   num_vertices_ = 0;
 }
 
+PolylineMap::Snapshot PolylineMap::TakeSnapshot() const {
+  Snapshot snapshot;
+  snapshot.reserve(polylines_.size());
+  for (const PolylineId id : Ids()) snapshot.emplace_back(id, polylines_.at(id));
+  return snapshot;
+}
+
+void PolylineMap::Restore(const Snapshot& snapshot) {
+  Clear();
+  for (const auto& [id, polyline] : snapshot) {
+    CheckPolyline(polyline);
+    num_vertices_ += polyline.points.size();
+    index_.Insert(id, polyline.points);
+    geometry_[id] = polyline.points;
+    polylines_[id] = polyline;
+    next_id_ = std::max(next_id_, id + 1);
+  }
+}
+
 const MapPolyline& PolylineMap::Get(PolylineId id) const { return polylines_.at(id); }
 
 std::vector<PolylineId> PolylineMap::Ids() const {

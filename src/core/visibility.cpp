@@ -163,13 +163,13 @@ void AppendBinParts(const Sweep& sweep, const SweptSegment& s, std::vector<BinPa
 std::vector<SweptSegment> GatherSegments(
     const std::unordered_map<PolylineId, Polyline>& polylines, const SegmentIndex& index,
     const Pose2& T_map_sensor, const VisibilityParams& params, const Sweep& sweep) {
-  const Pose2 T_sensor_map = T_map_sensor.Inverse();
+  const PointTransform T_sensor_map(T_map_sensor.Inverse());
   std::vector<SweptSegment> out;
   for (const SegmentRef& ref : index.QueryDisc(T_map_sensor.Translation(), params.max_range_m)) {
     const auto it = polylines.find(ref.polyline);
     if (it == polylines.end() || ref.segment + 1 >= it->second.size()) continue;
-    SweptSegment s{ref.polyline, ref.segment, T_sensor_map * it->second[ref.segment],
-                   T_sensor_map * it->second[ref.segment + 1]};
+    SweptSegment s{ref.polyline, ref.segment, T_sensor_map(it->second[ref.segment]),
+                   T_sensor_map(it->second[ref.segment + 1])};
     if ((s.b - s.a).squaredNorm() <= 0.0) continue;
     if (!ClipToDisc(s.a, s.b, params.max_range_m, s.t0, s.t1)) continue;
     if (AssignBins(sweep, s)) out.push_back(s);
