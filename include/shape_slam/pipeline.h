@@ -26,6 +26,7 @@
 #include "shape_slam/loop_closure.h"
 #include "shape_slam/polyline_map.h"
 #include "shape_slam/pose_graph.h"
+#include "shape_slam/scan_insertion.h"
 #include "shape_slam/scan_matcher.h"
 #include "shape_slam/scan_shapes.h"
 #include "shape_slam/shape_matcher.h"
@@ -127,6 +128,10 @@ struct ShapeSlamParams {
 /// refinement, selection and window search; the seed counts of scan_match_*).
 ScanMatchParams ToScanMatchParams(const ShapeSlamParams& params);
 
+/// The scan insertion settings of the mapper's map update (shapes, visibility, map update), for
+/// inserting scans at known poses as the mapper inserts its keyframes.
+ScanInsertionParams ToScanInsertionParams(const ShapeSlamParams& params);
+
 /// What the mapper made of the log's odometry so far. Real logs come without odometry (no
 /// odometry at all, or every pose zero): odometry that has never moved since the first scan is
 /// treated as absent, and such scans are matched by shape alone (§4.3), as with use_odometry =
@@ -167,6 +172,18 @@ class ShapeSlam {
  public:
   /// Throws std::invalid_argument when a parameter is invalid (the message names it).
   explicit ShapeSlam(const ShapeSlamParams& params = {});
+
+  /// Continues mapping in a saved map (`shape-slam run --map`): `initial_map` (map frame) is
+  /// the starting map, kept and extended by the new scans like a map the mapper built itself
+  /// (its polylines are merged with what the new scans see, §5.2), and is the base on which the
+  /// map is rebuilt after a loop closure. It is not in the pose graph: its frame is a fixed
+  /// node to which every keyframe with a trusted match is tied by its pose, so that loop
+  /// closures among the new keyframes keep them in that frame. The first scan is predicted at
+  /// `T_map_robot_first` (the Localizer's global search or a known pose) and localized against
+  /// the map from there (§4.3, no odometry yet). Throws std::invalid_argument for invalid params, an empty map or a
+  /// pose that is not finite.
+  ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_map,
+            const Pose2& T_map_robot_first);
 
   /// Processes the next scan. Throws std::invalid_argument for a malformed scan (sizes differ,
   /// non-finite angles or timestamp); a scan without valid points is not an error (it is
@@ -227,10 +244,13 @@ class ShapeSlam {
                                const Eigen::Matrix3d& covariance) const;
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
                    const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
+  void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
+                    const Eigen::Matrix3d& covariance);
   void OptimizeAndRebuild();
 
   ShapeSlamParams params_;
   PolylineMap map_;
+  PolylineMap initial_map_;  // the map given to start from (empty when mapping from scratch)
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;
   std::vector<LoopKeyframe> places_;  // the keyframes' shapes, node and travel (same order)

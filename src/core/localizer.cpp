@@ -365,4 +365,15 @@ LocalizerReport Localizer::Process(const LaserScan& input_scan) {
   return report;
 }
 
+std::optional<FirstPose> LocalizeFirstScan(const PolylineMap& map,
+                                           const std::vector<LaserScan>& scans,
+                                           std::size_t max_scans, const LocalizerParams& params) {
+  Localizer localizer(map, params);
+  for (std::size_t i = 0; i < std::min(max_scans, scans.size()); ++i) {
+    const LocalizerReport report = localizer.Process(scans[i]);
+    if (report.localized) return FirstPose{i, report.T_map_robot};
+  }
+  return std::nullopt;
+}
+
 }  // namespace shape_slam

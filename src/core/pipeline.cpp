@@ -115,6 +115,15 @@ ScanMatchParams ToScanMatchParams(const ShapeSlamParams& params) {
   return scan_match;
 }
 
+ScanInsertionParams ToScanInsertionParams(const ShapeSlamParams& params) {
+  ScanInsertionParams insertion;
+  insertion.shapes = params.shapes;
+  insertion.visibility = params.visibility;
+  insertion.visibility_fov_margin_rad = params.visibility_fov_margin_rad;
+  insertion.map_update = params.map_update;
+  return insertion;
+}
+
 const char* ToString(OdometryStatus status) {
   switch (status) {
     case OdometryStatus::kDisabled: return "disabled";
@@ -131,6 +140,24 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
       loop_closer_(params.loop_closure, ToScanMatchParams(params)) {
   params_.Validate();
   if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
+}
+
+// The saved map is copied into an index of this mapper's cell size; the first scan is then
+// predicted at the given pose, as if the robot had arrived there (its motion prior is the
+// correction the first match makes).
+ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_map,
+                     const Pose2& T_map_robot_first)
+    : ShapeSlam(params) {
+  if (initial_map.Empty()) throw std::invalid_argument("ShapeSlam: the initial map is empty");
+  if (!std::isfinite(T_map_robot_first.x) || !std::isfinite(T_map_robot_first.y) ||
+      !std::isfinite(T_map_robot_first.theta)) {
+    throw std::invalid_argument("ShapeSlam: the first robot pose is not finite");
+  }
+  initial_map_ = PolylineMap(params_.index_cell_size_m);
+  for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
+  map_ = initial_map_;
+  graph_.AddNode(Pose2());  // node 0, held fixed: the frame of the loaded map (AddMapAnchor)
+  last_T_map_robot_ = T_map_robot_first;
 }
 
 // Odometry that has not moved since the first scan is no odometry (logs without any carry
@@ -218,8 +245,26 @@ void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
     edge->to = node;
     graph_.AddEdge(*edge);
   }
+  if (!initial_map_.Empty()) AddMapAnchor(node, T_map_robot, trusted, covariance);
   keyframes_.push_back({scan, trusted});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
+}
+
+// A continued map: the loaded map is not in the graph, node 0 stands for its frame. A keyframe
+// whose match was trusted is tied to node 0 by its pose (a loop edge, so robust), and the first
+// keyframe always (weakly when unconfirmed): a loop closure among the new keyframes must then
+// not pull them away from the map they were localized in, and the graph has one fixed node.
+void ShapeSlam::AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
+                             const Eigen::Matrix3d& covariance) {
+  if (!trusted && !keyframes_.empty()) return;
+  PoseGraphEdge anchor;
+  anchor.from = 0;
+  anchor.to = node;
+  anchor.T_from_to = T_map_robot;
+  anchor.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
+                              : UnconfirmedCovariance(params_.loop_closure);
+  anchor.loop = true;
+  graph_.AddEdge(anchor);
 }
 
 // Optimises the pose graph, then rebuilds the map from every keyframe at its corrected pose
@@ -236,11 +281,8 @@ void ShapeSlam::OptimizeAndRebuild() {
   }
   if (!moved) return;  // the map already stands where the keyframes are
   map_.Clear();
-  ScanInsertionParams insertion;
-  insertion.shapes = params_.shapes;
-  insertion.visibility = params_.visibility;
-  insertion.visibility_fov_margin_rad = params_.visibility_fov_margin_rad;
-  insertion.map_update = params_.map_update;
+  for (const PolylineId id : initial_map_.Ids()) map_.Add(initial_map_.Get(id));
+  const ScanInsertionParams insertion = ToScanInsertionParams(params_);
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
     const Keyframe& kf = keyframes_[k];
     const Pose2 T_map_sensor = graph_.Node(places_[k].node) * kf.scan.T_robot_sensor;
