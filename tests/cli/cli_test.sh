@@ -123,7 +123,8 @@ expect 0 "" -- "$BIN" run "$WORK/noscan.log" --out "$WORK/noscan" --quiet
 SEGV_LOG="$DATA/../../fuzz/findings/rawlog_reader/mrpt_segv_action_movement.rawlog"
 sanitized=$(ldd "$BIN" 2>/dev/null | grep -c libasan || true)  # not grep -q: pipefail + SIGPIPE
 if [ -f "$SEGV_LOG" ] && [ "$sanitized" = "0" ]; then
-  expect 1 "fatal signal.*reading the log" -- "$BIN" extract "$SEGV_LOG" --scan 0
+  # scan 0 is the frame before the corrupt action collection; scan 1 needs that entry.
+  expect 1 "fatal signal.*reading the log" -- "$BIN" extract "$SEGV_LOG" --scan 1
 fi
 
 # A log whose odometry is all zero (how real logs without odometry look): noticed, said on
