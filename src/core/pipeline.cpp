@@ -18,17 +18,7 @@ namespace {
 using internal::NonNegative;
 using internal::Positive;
 
-void ValidateScan(const LaserScan& scan) {
-  if (scan.ranges_m.size() != scan.angles_rad.size()) {
-    throw std::invalid_argument("scan at t=" + std::to_string(scan.timestamp_s) + " has " +
-                                std::to_string(scan.ranges_m.size()) + " ranges but " +
-                                std::to_string(scan.angles_rad.size()) + " angles");
-  }
-  if (!std::isfinite(scan.timestamp_s)) throw std::invalid_argument("scan timestamp is not finite");
-  for (const double a : scan.angles_rad) {
-    if (!std::isfinite(a)) throw std::invalid_argument("scan has a non-finite beam angle");
-  }
-}
+using internal::ValidateScan;  // shared with the localizer
 
 Eigen::Matrix3d UnconfirmedCovariance(const LoopClosureParams& p) {
   const double m2 = p.unconfirmed_sigma_m * p.unconfirmed_sigma_m;
