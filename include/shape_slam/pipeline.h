@@ -180,8 +180,8 @@ class ShapeSlam {
   /// node to which every keyframe with a trusted match is tied by its pose, so that loop
   /// closures among the new keyframes keep them in that frame. The first scan is predicted at
   /// `T_map_robot_first` (the Localizer's global search or a known pose) and localized against
-  /// the map from there (§4.3, no odometry yet). Throws std::invalid_argument for invalid params, an empty map or a
-  /// pose that is not finite.
+  /// the map from there (§4.3, no odometry yet). Throws std::invalid_argument for invalid
+  /// params, an empty map or a pose that is not finite.
   ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_map,
             const Pose2& T_map_robot_first);
 

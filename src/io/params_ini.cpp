@@ -332,7 +332,9 @@ ShapeSlamParams ParseParamsIni(const std::string& text, const std::string& name,
   return ParseLocalizerParamsIni(text, name, with_defaults).stages;
 }
 
-ShapeSlamParams LoadParamsIni(const std::string& path) { return LoadLocalizerParamsIni(path).stages; }
+ShapeSlamParams LoadParamsIni(const std::string& path) {
+  return LoadLocalizerParamsIni(path).stages;
+}
 
 std::string FormatParamsIni(const ShapeSlamParams& params) {
   LocalizerParams with_defaults;

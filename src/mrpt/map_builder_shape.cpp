@@ -252,7 +252,7 @@ void CMetricMapBuilderShape::Finish() {
 }
 
 unsigned int CMetricMapBuilderShape::getCurrentlyBuiltMapSize() {
-  return static_cast<unsigned int>(initial_simplemap_.size()) + static_cast<unsigned int>(keyframes_);
+  return static_cast<unsigned int>(initial_simplemap_.size() + keyframes_);
 }
 
 }  // namespace shape_slam

@@ -8,25 +8,8 @@
 set -uo pipefail
 BIN=$1
 LOG=$2/radish/intel.log.gz
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-pass() { echo "ok: $*"; }
-
-# expect CODE PATTERN -- command...: exit code CODE and PATTERN (grep -E) in stdout+stderr.
-expect() {
-  local code=$1 pattern=$2
-  shift 3
-  local out rc
-  out=$("$@" 2>&1)
-  rc=$?
-  if [ "$rc" -ne "$code" ]; then
-    fail "'$*' exited $rc, expected $code; output: ${out:0:400}"
-  elif ! grep -Eiq -- "$pattern" <<<"$out"; then
-    fail "'$*' output lacks /$pattern/: ${out:0:400}"
-  fi
-}
+# WORK, fail, pass, expect CODE PATTERN -- command...
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
 # compare.py FIRST_RUN CONTINUED_RUN: the scans of the first run, those the continued run has too
 # (same timestamp), the fraction of these within 0.1 m, the fraction of the loaded map's vertices within 0.1 m of the

@@ -201,7 +201,8 @@ TEST(CMetricMapBuilderShape, InitializeFromASimplemapContinuesItsMap) {
   continued.initialize(simplemap);
   CPolylineMap oracle;
   oracle.loadFromSimpleMap(simplemap);
-  const PolylineMap& start = continued.getCurrentlyBuiltMetricMap()->mapByClass<CPolylineMap>()->Map();
+  const PolylineMap& start =
+      continued.getCurrentlyBuiltMetricMap()->mapByClass<CPolylineMap>()->Map();
   ASSERT_EQ(start.NumPolylines(), oracle.Map().NumPolylines());
   EXPECT_EQ(start.NumVertices(), oracle.Map().NumVertices());
   const mrpt::poses::CPose3D at_start = continued.getCurrentPoseEstimation()->getMeanVal();
