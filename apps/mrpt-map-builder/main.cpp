@@ -4,9 +4,6 @@
 // written for MRPT's map builders; `shape-slam run` is the full tool.
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/io/CFileGZInputStream.h>
-#include <mrpt/obs/CActionCollection.h>
-#include <mrpt/obs/CRawlog.h>
-#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDF.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -33,14 +30,15 @@ constexpr const char* kUsage =
     "\n"
     "Maps an MRPT rawlog (actions + sensory frames, or observations only) with\n"
     "shape_slam::CMetricMapBuilderShape, fed entry by entry as icp-slam feeds\n"
-    "CMetricMapBuilderICP.\n"
+    "CMetricMapBuilderICP (a sensory frame with no action before it, which icp-slam\n"
+    "drops, is fed with an empty action collection, as shape-slam run uses it).\n"
     "\n"
     "  --config FILE   MRPT ini; keys of --section: params_file (a ShapeSLAM parameter\n"
     "                  ini, config/default.ini), use_odometry (true/false)\n"
     "  --section NAME  default MappingApplication\n"
     "  --out DIR       output directory (default ./mrpt-map-builder-out), created if needed\n"
     "  --no-odometry   ignore the log's odometry (use_odometry = false)\n"
-    "  --max-entries N process only the first N rawlog entries\n"
+    "  --max-entries N process only the first N steps (action + frame, or observation)\n"
     "\n"
     "Outputs in DIR:\n"
     "  log_estimated_path.txt  `step x y phi` after every rawlog entry (as icp-slam's)\n"
@@ -98,29 +96,29 @@ void Configure(shape_slam::CMetricMapBuilderShape& builder, const Args& args) {
   }
 }
 
-// icp-slam's main loop: returns the `step x y phi` lines.
+// icp-slam's main loop (one step per action collection + sensory frame, or per observation),
+// reading the entries one by one as CRawlog does, with one difference: a sensory frame with no
+// action collection before it (MRPT's sample log starts with one) is processed with an empty
+// action collection (CMetricMapBuilderShape::ProcessRawlogEntry), where
+// CRawlog::getActionObservationPairOrObservation drops it, so that the builder sees every scan
+// `shape-slam run` maps. Returns the `step x y phi` lines.
 std::string RunLog(shape_slam::CMetricMapBuilderShape& builder, const Args& args) {
   mrpt::io::CFileGZInputStream file(args.log);
   auto archive = mrpt::serialization::archiveFrom(file);
   std::ostringstream path;
-  std::size_t entry = 0;
-  for (long long step = 0; args.max_entries < 0 || step < args.max_entries; ++step) {
-    mrpt::obs::CActionCollection::Ptr actions;
-    mrpt::obs::CSensoryFrame::Ptr frame;
-    mrpt::obs::CObservation::Ptr observation;
-    if (!mrpt::obs::CRawlog::getActionObservationPairOrObservation(archive, actions, frame,
-                                                                   observation, entry)) {
-      break;  // end of the log
+  for (long long step = 0; args.max_entries < 0 || step < args.max_entries;) {
+    mrpt::serialization::CSerializable::Ptr entry;
+    try {
+      archive >> entry;
+    } catch (const mrpt::serialization::CExceptionEOF&) {
+      break;  // the end of the log
     }
-    if (observation) {
-      builder.processObservation(observation);
-    } else {
-      builder.processActionObservation(*actions, *frame);
-    }
+    if (!builder.ProcessRawlogEntry(entry)) continue;  // an action collection, or other
     const mrpt::poses::CPose3D pose = builder.getCurrentPoseEstimation()->getMeanVal();
     char line[128];
     std::snprintf(line, sizeof(line), "%lld %f %f %f\n", step, pose.x(), pose.y(), pose.yaw());
     path << line;
+    ++step;
   }
   return path.str();
 }

@@ -118,7 +118,11 @@ LaserScan ReadScanAt(const std::string& path, long long index, bool strict) {
 }
 
 ShapeSlamParams LoadParamsForApp(const std::optional<std::string>& ini_path) {
-  return ini_path ? io::LoadParamsIni(*ini_path) : ShapeSlamParams{};
+  return LoadLocalizerParamsForApp(ini_path).stages;
+}
+
+LocalizerParams LoadLocalizerParamsForApp(const std::optional<std::string>& ini_path) {
+  return ini_path ? io::LoadLocalizerParamsIni(*ini_path) : LocalizerParams{};
 }
 
 double Percentile(std::vector<double> values, double q) {

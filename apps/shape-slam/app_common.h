@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "shape_slam/localizer.h"
 #include "shape_slam/pipeline.h"
 #include "shape_slam/types.h"
 #include "shape_slam_io/log_reader.h"
@@ -43,6 +44,9 @@ LaserScan ReadScanAt(const std::string& path, long long index, bool strict);
 /// The mapper's parameters: the defaults, overridden by an ini file when one is given (every
 /// key validated; see config/default.ini).
 ShapeSlamParams LoadParamsForApp(const std::optional<std::string>& ini_path);
+
+/// The same with the localizer's own settings ([localizer]), for localize and run --map.
+LocalizerParams LoadLocalizerParamsForApp(const std::optional<std::string>& ini_path);
 
 /// The q-quantile (0..1, linear interpolation) of the values; 0 when there are none.
 double Percentile(std::vector<double> values, double q);

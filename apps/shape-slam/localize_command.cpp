@@ -33,7 +33,8 @@ ArgParser MakeParser() {
   parser.Positional("MAP", "map.polylines written by 'shape-slam run'")
       .Positional("LOG", "CARMEN log (.log/.clf[.gz]) or MRPT rawlog")
       .Option("--initial", {"X", "Y", "THETA"}, "the robot's first pose in the map (m, m, rad)")
-      .Option("--config", {"FILE.ini"}, "parameters (see config/default.ini for every key)")
+      .Option("--config", {"FILE.ini"},
+              "parameters: the mapper's stages and [localizer] (config/default.ini has every key)")
       .Option("--out", {"DIR"}, "output directory", "./shape-slam-localize")
       .Flag("--no-odometry", "ignore the log's odometry: match by shape alone (paper §4.3)")
       .Option("--max-scans", {"N"}, "process only the first N laser scans")
@@ -135,8 +136,7 @@ int RunLocalize(const Args& args) {
     return 0;
   }
   const auto wall_start = std::chrono::steady_clock::now();
-  LocalizerParams params;
-  params.stages = LoadParamsForApp(parser.GetOptional("--config"));
+  LocalizerParams params = LoadLocalizerParamsForApp(parser.GetOptional("--config"));
   if (parser.Has("--no-odometry")) params.stages.use_odometry = false;
   const std::string map_path = parser.Get("MAP"), log = parser.Get("LOG");
   const std::string out_dir = parser.GetOptional("--out").value_or("shape-slam-localize");

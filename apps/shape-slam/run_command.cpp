@@ -14,6 +14,7 @@
 #include "commands.h"
 #include "app_common.h"
 #include "progress.h"
+#include "shape_slam/localizer.h"
 #include "shape_slam/pipeline.h"
 #include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/drawing.h"
@@ -33,6 +34,9 @@ namespace {
 constexpr const char* kDefaultLog =
     "/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog";
 
+// run --map without --initial: the scans the global search may try before the run fails.
+constexpr long long kDefaultSearchScans = 20;
+
 ArgParser MakeParser() {
   ArgParser parser("run",
                    "Builds a polyline map from a laser log: per scan, polylines are extracted and\n"
@@ -41,6 +45,12 @@ ArgParser MakeParser() {
   parser.Positional("LOG", "CARMEN log (.log/.clf[.gz]) or MRPT rawlog", false)
       .Option("--config", {"FILE.ini"}, "parameters (see config/default.ini for every key)")
       .Option("--out", {"DIR"}, "output directory", "./shape-slam-out")
+      .Option("--map", {"MAP"}, "continue mapping from a saved map.polylines (kept and extended)")
+      .Option("--initial", {"X", "Y", "THETA"},
+              "with --map: the robot's first pose in MAP (m, m, rad); default: global search")
+      .Option("--search-scans", {"N"},
+              "with --map and no --initial: fail when none of the first N scans is localized",
+              std::to_string(kDefaultSearchScans))
       .Flag("--no-odometry", "ignore the log's odometry: match by shape alone (paper §4.3)")
       .Option("--max-scans", {"N"}, "process only the first N laser scans")
       .Flag("--quiet", "no progress bar and no summary")
@@ -64,11 +74,20 @@ ArgParser MakeParser() {
           "                   (observations2map, RawLogViewer; MRPT builds only)\n"
           "  stats.json       scans, wall time, per-scan times, map size, log issues\n"
           "  scan_times.csv   per laser scan: scan index, timestamp, processing time (ms)\n\n"
-          "Example:\n  shape-slam run datasets/radish/intel.log.gz --out intel-out");
+          "Continuing a map (--map MAP): MAP is loaded and is the starting map; the new scans\n"
+          "extend it (its polylines are merged with what they see, as in mapping) and the\n"
+          "output map holds both. The first scan is placed by the global search of 'shape-slam\n"
+          "localize' (its [localizer] keys apply): the scans before the first one it localizes\n"
+          "are left out (noted on stderr and in stats.json, start_map.first_scan), and when none\n"
+          "of the first --search-scans scans is localized the run fails (exit code 1). With\n"
+          "--initial the first scan starts there. --out must not hold MAP itself.\n\n"
+          "Examples:\n  shape-slam run datasets/radish/intel.log.gz --out intel-out\n"
+          "  shape-slam run more.log --map intel-out/map.polylines --out intel-more");
   return parser;
 }
 
 struct RunOutput {
+  std::size_t first_scan = 0;  // index in the log of the first scan mapped (run --map)
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
   std::size_t matched = 0, keyframes = 0, fast_tracked = 0;
@@ -102,6 +121,90 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
   return out;
 }
 
+
+// run --map: the saved map, and where the log starts in it.
+struct MapStart {
+  std::string path;
+  PolylineMap map;
+  std::size_t polylines = 0;        // of the loaded map
+  std::optional<Pose2> initial;     // --initial
+  std::size_t search_scans = kDefaultSearchScans;
+  FirstPose first;                  // the first scan mapped and its pose in the map
+};
+
+// The run must never destroy its input: an --out whose map.polylines is the file given to --map
+// is refused.
+void CheckOutputKeepsMap(const std::string& map_path, const std::string& out_dir) {
+  namespace fs = std::filesystem;
+  const fs::path target = fs::path(out_dir) / "map.polylines";
+  std::error_code ec_equivalent, ec_map, ec_target;
+  const bool equivalent = fs::equivalent(map_path, target, ec_equivalent);
+  const fs::path map_canonical = fs::weakly_canonical(map_path, ec_map);
+  const fs::path target_canonical = fs::weakly_canonical(target, ec_target);
+  const bool same_path = !ec_map && !ec_target && map_canonical == target_canonical;
+  if (equivalent || same_path) {
+    throw UsageError("--out " + out_dir + " would overwrite the input map " + map_path +
+                     " (its map.polylines): choose another output directory");
+  }
+}
+
+std::optional<MapStart> ParseMapStart(const ArgParser& parser, const std::string& out_dir) {
+  if (!parser.Has("--map")) {
+    if (parser.Has("--initial") || parser.Has("--search-scans")) {
+      throw UsageError("--initial and --search-scans need --map MAP");
+    }
+    return std::nullopt;
+  }
+  MapStart start;
+  start.path = parser.Get("--map");
+  CheckOutputKeepsMap(start.path, out_dir);
+  if (parser.Has("--initial")) {
+    const std::vector<double> v = parser.GetDoubles("--initial");
+    start.initial = Pose2(v[0], v[1], v[2]);
+  }
+  if (parser.Has("--search-scans")) {
+    start.search_scans = static_cast<std::size_t>(parser.GetIndex("--search-scans"));
+    if (start.search_scans == 0) throw UsageError("--search-scans: must be at least 1");
+  }
+  start.map = io::LoadMapFile(start.path);  // errors name the file and line
+  if (start.map.Empty()) throw std::runtime_error(start.path + ": the map has no polylines");
+  start.polylines = start.map.NumPolylines();
+  return start;
+}
+
+// Where the log starts in the map: --initial, or the first scan the global search of the
+// localizer finds (localizer.h); the scans before it are left out.
+void PlaceFirstScan(MapStart& start, const std::vector<LaserScan>& scans,
+                    const LocalizerParams& params, const std::string& log) {
+  if (start.initial) {
+    start.first = {0, *start.initial};
+    return;
+  }
+  SetFatalContext("localizing the first scans of " + log.substr(0, 400) + " in the map");
+  const std::optional<FirstPose> first =
+      LocalizeFirstScan(start.map, scans, start.search_scans, params);
+  if (!first) {
+    throw std::runtime_error(start.path + ": none of the first " +
+                             std::to_string(std::min(start.search_scans, scans.size())) +
+                             " scans of " + log +
+                             " could be localized in the map (global search); give --initial "
+                             "X Y THETA or a larger --search-scans");
+  }
+  start.first = *first;
+  if (first->scan > 0) {
+    std::cerr << "note: scans 0-" << first->scan - 1 << " were not localized in " << start.path
+              << " and are left out; mapping starts at scan " << first->scan << "\n";
+  }
+}
+
+void StartMapJson(io::JsonWriter& json, const MapStart& start) {
+  json.Key("start_map").BeginObject().Key("path").Value(start.path);
+  json.Key("polylines").Value(start.polylines);
+  json.Key("initial_pose_given").Value(start.initial.has_value());
+  json.Key("first_scan").Value(start.first.scan);
+  json.Key("x").Value(start.first.T_map_robot.x).Key("y").Value(start.first.T_map_robot.y);
+  json.Key("theta").Value(start.first.T_map_robot.theta).EndObject();
+}
 
 // Bytes of a 5 cm occupancy grid (1 byte per cell, MRPT's 8-bit cells) covering the map's
 // bounding box: the representation the paper compares against.
@@ -151,7 +254,7 @@ std::string FormatScanTimes(const RunOutput& out) {
   csv << "scan,timestamp_s,ms\n" << std::fixed;
   const std::size_t n = std::min(out.scan_ms.size(), out.trajectory.size());
   for (std::size_t i = 0; i < n; ++i) {
-    csv << i << ',' << std::setprecision(6) << out.trajectory[i].timestamp_s << ','
+    csv << out.first_scan + i << ',' << std::setprecision(6) << out.trajectory[i].timestamp_s << ','
         << std::setprecision(4) << out.scan_ms[i] << '\n';
   }
   return csv.str();
@@ -159,9 +262,10 @@ std::string FormatScanTimes(const RunOutput& out) {
 
 std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t map_file_bytes,
                       double wall_s, const io::LogReader& reader, const ShapeSlamParams& params,
-                      const OdometryReport& odometry) {
+                      const OdometryReport& odometry, const std::optional<MapStart>& start) {
   io::JsonWriter json;
   json.BeginObject().Key("scans").Value(out.trajectory.size());
+  if (start) StartMapJson(json, *start);
   json.Key("wall_s").Value(wall_s).Key("processing_s").Value(out.processing_s);
   double sum = 0.0;
   for (const double ms : out.scan_ms) sum += ms;
@@ -268,10 +372,11 @@ int RunRun(const Args& args) {
     return 0;
   }
   const auto wall_start = std::chrono::steady_clock::now();
-  ShapeSlamParams params = LoadParamsForApp(parser.GetOptional("--config"));
-  if (parser.Has("--no-odometry")) params.use_odometry = false;
+  LocalizerParams config = LoadLocalizerParamsForApp(parser.GetOptional("--config"));
+  if (parser.Has("--no-odometry")) config.stages.use_odometry = false;
+  const ShapeSlamParams& params = config.stages;
   if (parser.Has("--print-config")) {
-    std::cout << io::FormatParamsIni(params);
+    std::cout << io::FormatParamsIni(config);
     return 0;
   }
   const std::string log = parser.GetOptional("LOG").value_or(kDefaultLog);
@@ -287,6 +392,7 @@ int RunRun(const Args& args) {
     throw UsageError("--grid-resolution: '" + parser.Get("--grid-resolution") +
                      "' is not a cell size > 0 (metres)");
   }
+  std::optional<MapStart> start = ParseMapStart(parser, out_dir);
   io::EnsureDirectory(out_dir);  // fail early on an unusable output path
 
   const std::unique_ptr<io::LogReader> reader = OpenLogForApp(log, parser.Has("--strict"));
@@ -298,17 +404,32 @@ int RunRun(const Args& args) {
   ReportLogIssues(*reader);
   if (scans.empty()) throw std::runtime_error(log + ": no laser scans to map");
 
-  ShapeSlam slam(params);
+  std::unique_ptr<ShapeSlam> mapper;
+  if (start) {
+    PlaceFirstScan(*start, scans, config, log);
+    mapper = std::make_unique<ShapeSlam>(params, start->map, start->first.T_map_robot);
+    scans.erase(scans.begin(), scans.begin() + static_cast<std::ptrdiff_t>(start->first.scan));
+  } else {
+    mapper = std::make_unique<ShapeSlam>(params);
+  }
+  ShapeSlam& slam = *mapper;
   SetFatalContext("mapping the log " + log.substr(0, 400));
-  const RunOutput out = RunMapper(slam, scans, quiet);
+  RunOutput out = RunMapper(slam, scans, quiet);
+  out.first_scan = start ? start->first.scan : 0;
   const std::string map_text = io::FormatMapFile(slam.Map());
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
   const std::string stats =
-      StatsJson(out, slam.Map(), map_text.size(), wall_s, *reader, params, slam.Odometry());
+      StatsJson(out, slam.Map(), map_text.size(), wall_s, *reader, params, slam.Odometry(), start);
   const std::vector<std::string> written = WriteOutputs(
       out_dir, out, slam, grids, stats, map_text, std::filesystem::path(log).filename().string());
   ReportRunIssues(out, slam.Odometry(), params.use_odometry);
+  if (!quiet && start) {
+    std::cout << std::fixed << std::setprecision(2) << "continued the map " << start->path << " ("
+              << start->polylines << " polylines) from scan " << start->first.scan << " at ("
+              << start->first.T_map_robot.x << ", " << start->first.T_map_robot.y << ", "
+              << start->first.T_map_robot.theta << ")\n";
+  }
   if (!quiet) {
     std::cout << std::fixed << std::setprecision(2) << "mapped " << out.trajectory.size()
               << " scans in " << out.processing_s << " s (median "

@@ -3,8 +3,8 @@
 //
 //   obs_only.rawlog        observations only: comment, scan without odometry, odometry, scan
 //   obs_only.rawlog.gz     the same, gzip (as MRPT writes rawlogs)
-//   actions_frames.rawlog  a sensory frame before any action (skipped), then two
-//                          (action collection, sensory frame) pairs
+//   actions_frames.rawlog  a sensory frame before any action (a scan at the odometry
+//                          origin), then two (action collection, sensory frame) pairs
 //   odd_scans.rawlog       a one-beam scan, a left-to-right scan with invalid readings, and a
 //                          malformed scan (zero aperture) between them
 //   sena_first2.rawlog     the first four entries of tests/data/logs/sena_first20_obs_only

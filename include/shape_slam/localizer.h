@@ -151,4 +151,19 @@ class Localizer {
   bool odometry_moved_ = false;
 };
 
+/// Where a log starts in a finished map (`shape-slam run --map`, then ShapeSlam's constructor
+/// from a map): the first scan the Localizer localizes by its global search.
+struct FirstPose {
+  std::size_t scan = 0;  ///< index of that scan
+  Pose2 T_map_robot;     ///< its pose in the map
+};
+
+/// Runs scans[0, max_scans) through a Localizer of `map` and returns the first scan it
+/// localizes, or nullopt when none of them is. Throws std::invalid_argument for invalid params,
+/// an empty map or a malformed scan.
+std::optional<FirstPose> LocalizeFirstScan(const PolylineMap& map,
+                                           const std::vector<LaserScan>& scans,
+                                           std::size_t max_scans,
+                                           const LocalizerParams& params = {});
+
 }  // namespace shape_slam

@@ -4,10 +4,12 @@
 // getCurrentPoseEstimation) runs ShapeSLAM instead.
 //
 //  * processActionObservation(actions, frame): the odometry increment of the best
-//    CActionRobotMovement2D is composed onto the odometry pose, then every
-//    CObservation2DRangeScan of the frame goes to ShapeSlam::Process (conversions.h, ToLaserScan)
-//    with that odometry pose; other observations are ignored. This is what `shape-slam run` does
-//    with a rawlog (rawlog_reader.h), so both give the same poses for the same scans.
+//    CActionRobotMovement2D is composed onto the odometry pose (the origin before the first
+//    action; an empty action collection adds nothing), then every CObservation2DRangeScan of
+//    the frame goes to ShapeSlam::Process (conversions.h, ToLaserScan) with that odometry pose;
+//    other observations are ignored. This is what `shape-slam run` does with a rawlog
+//    (rawlog_reader.h), so both give the same poses for the same scans; a frame with no action
+//    before it (MRPT's CRawlog drops it) is fed with an empty CActionCollection.
 //  * processObservation(obs), observations-only rawlogs: a CObservationOdometry sets the
 //    odometry pose (absolute), a CObservation2DRangeScan is processed; others are ignored.
 //  * Scans the core rejects (no beam, bad aperture, no timestamp when others had one, ...) are
@@ -17,15 +19,24 @@
 //    is the refinement's for a matched scan, the floor of the odometry noise model
 //    (OdometryNoiseParams sigma_xy_m, sigma_theta_rad) for a scan placed by prediction.
 //  * getCurrentlyBuiltMap: a CSimpleMap of the keyframes at their corrected poses (as
-//    `shape-slam run` writes map.simplemap); getCurrentlyBuiltMapSize: the number of keyframes.
+//    `shape-slam run` writes map.simplemap), after initialize()'s initial frames if any;
+//    getCurrentlyBuiltMapSize: the number of those frames.
 //  * getCurrentlyBuiltMetricMap: a CMultiMetricMap holding one shape_slam::CPolylineMap with the
 //    mapper's polylines (updated on demand after a change).
 //  * saveCurrentEstimationToImage: a PNG of the map and the path (whatever formatEMF_BMP says).
-//  * initialize(initialMap, x0): restarts the mapper empty; the map frame is placed at x0's mean
-//    (every pose reported and the polylines of the metric map are x0 * the mapper's). A
-//    non-empty initialMap is not supported (std::invalid_argument): the core cannot be seeded
-//    with a fixed map. CMetricMapBuilder::options (enableMapUpdating, debugForceInsertion,
-//    alwaysInsertByClass) are not used: the mapper decides its keyframes itself.
+//  * initialize(initialMap, x0) with an empty initialMap: restarts the mapper empty; the map
+//    frame is placed at x0's mean (every pose reported and the polylines of the metric map are
+//    x0 * the mapper's).
+//  * initialize(initialMap, x0) with a non-empty CSimpleMap (as CMetricMapBuilderICP): the
+//    starting map is built from its laser scans at their poses (the mean of each pose PDF) by
+//    the core's scan insertion (scan_insertion.h, InsertScan, as the mapper inserts a
+//    keyframe); the map frame is the simplemap's frame, and the robot starts at x0's mean, or at
+//    the simplemap's last pose without x0. The mapper then goes on as `shape-slam run --map`
+//    (ShapeSlam's constructor from a map); getCurrentlyBuiltMap returns the initial frames
+//    followed by the new keyframes. InitializeFromMap does the same from a PolylineMap (e.g. a
+//    saved map.polylines, io::LoadMapFile).
+//  * CMetricMapBuilder::options (enableMapUpdating, debugForceInsertion, alwaysInsertByClass)
+//    are not used: the mapper decides its keyframes itself.
 //
 // Not thread-safe (unlike CMetricMapBuilderICP): call it from one thread.
 //
@@ -34,7 +45,10 @@
 #pragma once
 
 #include <mrpt/maps/CMultiMetricMap.h>
+#include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservation.h>
+#include <mrpt/serialization/CSerializable.h>
 #include <mrpt/slam/CMetricMapBuilder.h>
 
 #include <memory>
@@ -85,12 +99,24 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
   /// Scans skipped because the core rejected them.
   int SkippedScans() const { return skipped_scans_; }
 
+  /// Restarts the mapper from `map` (world frame; e.g. io::LoadMapFile of a map.polylines), the
+  /// robot at `T_world_robot`: the map is kept and extended by the new scans. The map frame is
+  /// the world frame. Throws std::invalid_argument for an empty map or a non-finite pose.
+  void InitializeFromMap(const PolylineMap& map, const Pose2& T_world_robot);
+
   /// At the end of the log: the mapper's final pose-graph optimisation and map rebuild
   /// (ShapeSlam::Finish). Call it before saving the map; processing may go on afterwards.
   void Finish();
 
   /// See the file comment (observations-only rawlogs).
   void processObservation(const mrpt::obs::CObservation::Ptr& obs);
+
+  /// One top-level rawlog entry, in file order, for a loop that reads entries itself (`archive
+  /// >> entry`): an action collection is kept for the sensory frame after it; a sensory frame
+  /// goes to processActionObservation with that collection, or with an empty one when there is
+  /// none (MRPT's CRawlog drops such a frame; `shape-slam run` uses it); an observation goes to
+  /// processObservation. Returns whether the entry was processed (a frame or an observation).
+  bool ProcessRawlogEntry(const mrpt::serialization::CSerializable::Ptr& entry);
 
   // mrpt::slam::CMetricMapBuilder
   void initialize(const mrpt::maps::CSimpleMap& initialMap = mrpt::maps::CSimpleMap(),
@@ -105,12 +131,16 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
 
  private:
   void Restart(const Pose2& T_world_map);
+  PolylineMap MapFromSimplemap(const mrpt::maps::CSimpleMap& simplemap) const;
   void ProcessObservation(const mrpt::obs::CObservation& observation);
   Pose2 CurrentPoseInMap() const;
 
   Options options_;
   std::unique_ptr<ShapeSlam> slam_;
   Pose2 T_world_map_;
+  mrpt::maps::CSimpleMap initial_simplemap_;  // initialize()'s initialMap, if any
+  Pose2 T_map_robot_start_;                   // the pose before the first scan
+  mrpt::obs::CActionCollection::Ptr pending_actions_;  // read, waiting for its sensory frame
   std::optional<Pose2> T_odom_robot_;       // odometry so far (increments or absolute)
   std::optional<Pose2> T_odom_last_scan_;   // odometry at the last processed scan
   std::optional<ScanReport> last_report_;

@@ -201,14 +201,19 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     loc.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
     loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
   };
-  // The fast track: the prediction alone, refined; shape matching only when it falls short.
-  const Pose2 predicted = guess.value_or(velocity_hint.value_or(Pose2()));
-  const std::vector<RankedCandidate> fast = selector.Rank(samples, {predicted}, reference, accept);
+  // The fast track (with odometry): the prediction alone, refined; shape matching only when it
+  // falls short.
+  const auto near_prediction = [&](const Pose2& T) {
+    return T.Translation().norm() <= params.fast_track_max_correction_m &&
+           std::abs(T.theta) <= params.fast_track_max_correction_rad && accept(T);
+  };
+  const std::vector<RankedCandidate> fast =
+      guess ? selector.Rank(samples, {*guess}, reference, near_prediction) : std::vector<RankedCandidate>{};
   if (!fast.empty() && fast.front().fit >= params.fast_track_min_fit) {
-    const RefinementResult refined = RefineAlignment(samples, all, fast.front().T_model_scan,
-                                                     prior ? prior : motion_prior, params.refinement);
+    const RefinementResult refined =
+        RefineAlignment(samples, all, fast.front().T_model_scan, prior, params.refinement);
     const double fit = refined.converged ? selector.Fit(samples, refined.T_map_scan) : 0.0;
-    if (fit >= params.fast_track_min_fit && accept(refined.T_map_scan)) {
+    if (fit >= params.fast_track_min_fit && near_prediction(refined.T_map_scan)) {
       loc.correction = refined.T_map_scan;
       loc.covariance = refined.covariance;
       loc.rms_error_m = refined.rms_error_m;

@@ -8,6 +8,7 @@
 #include <utility>
 
 #include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/validation.h"
 #include "shape_slam/polyline_extraction.h"
 #include "shape_slam/scan_shapes.h"
 #include "shape_slam/visibility.h"
@@ -31,16 +32,7 @@ const LocalizerParams& Validated(const LocalizerParams& params) {
   return params;
 }
 
-void ValidateScan(const LaserScan& scan) {
-  if (scan.ranges_m.size() != scan.angles_rad.size()) {
-    throw std::invalid_argument("scan at t=" + std::to_string(scan.timestamp_s) +
-                                ": ranges and angles differ in number");
-  }
-  if (!std::isfinite(scan.timestamp_s)) throw std::invalid_argument("scan timestamp is not finite");
-  for (const double a : scan.angles_rad) {
-    if (!std::isfinite(a)) throw std::invalid_argument("scan has a non-finite beam angle");
-  }
-}
+using internal::ValidateScan;  // shared with the mapper
 
 std::vector<Polyline> MapWalls(const PolylineMap& map) {
   if (map.Empty()) throw std::invalid_argument("Localizer: the map is empty");
@@ -362,6 +354,17 @@ LocalizerReport Localizer::Process(const LaserScan& input_scan) {
   report.timestamp_s = scan.timestamp_s;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;
+}
+
+std::optional<FirstPose> LocalizeFirstScan(const PolylineMap& map,
+                                           const std::vector<LaserScan>& scans,
+                                           std::size_t max_scans, const LocalizerParams& params) {
+  Localizer localizer(map, params);
+  for (std::size_t i = 0; i < std::min(max_scans, scans.size()); ++i) {
+    const LocalizerReport report = localizer.Process(scans[i]);
+    if (report.localized) return FirstPose{i, report.T_map_robot};
+  }
+  return std::nullopt;
 }
 
 }  // namespace shape_slam

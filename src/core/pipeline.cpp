@@ -18,17 +18,7 @@ namespace {
 using internal::NonNegative;
 using internal::Positive;
 
-void ValidateScan(const LaserScan& scan) {
-  if (scan.ranges_m.size() != scan.angles_rad.size()) {
-    throw std::invalid_argument("scan at t=" + std::to_string(scan.timestamp_s) + " has " +
-                                std::to_string(scan.ranges_m.size()) + " ranges but " +
-                                std::to_string(scan.angles_rad.size()) + " angles");
-  }
-  if (!std::isfinite(scan.timestamp_s)) throw std::invalid_argument("scan timestamp is not finite");
-  for (const double a : scan.angles_rad) {
-    if (!std::isfinite(a)) throw std::invalid_argument("scan has a non-finite beam angle");
-  }
-}
+using internal::ValidateScan;  // shared with the localizer
 
 Eigen::Matrix3d UnconfirmedCovariance(const LoopClosureParams& p) {
   const double m2 = p.unconfirmed_sigma_m * p.unconfirmed_sigma_m;
@@ -75,9 +65,9 @@ void ShapeSlamParams::Validate() const {
   Positive(index_cell_size_m, "ShapeSlamParams::index_cell_size_m");
   Positive(coarse_gate_m, "ShapeSlamParams::coarse_gate_m");
   Positive(new_territory_distance_m, "ShapeSlamParams::new_territory_distance_m");
-  if (!(fast_track_min_fit >= 0.0) || std::isnan(fast_track_min_fit)) {
-    throw std::invalid_argument("ShapeSlamParams::fast_track_min_fit must be >= 0 (above 1: off)");
-  }
+  NonNegative(fast_track_min_fit, "ShapeSlamParams::fast_track_min_fit");
+  NonNegative(fast_track_max_correction_m, "ShapeSlamParams::fast_track_max_correction_m");
+  NonNegative(fast_track_max_correction_rad, "ShapeSlamParams::fast_track_max_correction_rad");
   if (!(max_untrusted_coverage >= 0.0 && max_untrusted_coverage <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
@@ -118,6 +108,15 @@ ScanMatchParams ToScanMatchParams(const ShapeSlamParams& params) {
   return scan_match;
 }
 
+ScanInsertionParams ToScanInsertionParams(const ShapeSlamParams& params) {
+  ScanInsertionParams insertion;
+  insertion.shapes = params.shapes;
+  insertion.visibility = params.visibility;
+  insertion.visibility_fov_margin_rad = params.visibility_fov_margin_rad;
+  insertion.map_update = params.map_update;
+  return insertion;
+}
+
 const char* ToString(OdometryStatus status) {
   switch (status) {
     case OdometryStatus::kDisabled: return "disabled";
@@ -134,6 +133,24 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
       loop_closer_(params.loop_closure, ToScanMatchParams(params)) {
   params_.Validate();
   if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
+}
+
+// The saved map is copied into an index of this mapper's cell size; the first scan is then
+// predicted at the given pose, as if the robot had arrived there (its motion prior is the
+// correction the first match makes).
+ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_map,
+                     const Pose2& T_map_robot_first)
+    : ShapeSlam(params) {
+  if (initial_map.Empty()) throw std::invalid_argument("ShapeSlam: the initial map is empty");
+  if (!std::isfinite(T_map_robot_first.x) || !std::isfinite(T_map_robot_first.y) ||
+      !std::isfinite(T_map_robot_first.theta)) {
+    throw std::invalid_argument("ShapeSlam: the first robot pose is not finite");
+  }
+  initial_map_ = PolylineMap(params_.index_cell_size_m);
+  for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
+  map_ = initial_map_;
+  graph_.AddNode(Pose2());  // node 0, held fixed: the frame of the loaded map (AddMapAnchor)
+  last_T_map_robot_ = T_map_robot_first;
 }
 
 // Odometry that has not moved since the first scan is no odometry (logs without any carry
@@ -221,8 +238,26 @@ void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
     edge->to = node;
     graph_.AddEdge(*edge);
   }
+  if (!initial_map_.Empty()) AddMapAnchor(node, T_map_robot, trusted, covariance);
   keyframes_.push_back({scan, trusted, T_map_robot});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
+}
+
+// A continued map: the loaded map is not in the graph, node 0 stands for its frame. A keyframe
+// whose match was trusted is tied to node 0 by its pose (a loop edge, so robust), and the first
+// keyframe always (weakly when unconfirmed): a loop closure among the new keyframes must then
+// not pull them away from the map they were localized in, and the graph has one fixed node.
+void ShapeSlam::AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
+                             const Eigen::Matrix3d& covariance) {
+  if (!trusted && !keyframes_.empty()) return;
+  PoseGraphEdge anchor;
+  anchor.from = 0;
+  anchor.to = node;
+  anchor.T_from_to = T_map_robot;
+  anchor.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
+                              : UnconfirmedCovariance(params_.loop_closure);
+  anchor.loop = true;
+  graph_.AddEdge(anchor);
 }
 
 // Optimises the pose graph, then rebuilds the map from the keyframes at their corrected poses
@@ -245,16 +280,12 @@ void ShapeSlam::RebuildFrom(int first_moved) {
   while (!checkpoints_.empty() && checkpoints_.back().keyframes > first_moved) checkpoints_.pop_back();
   int start = 0;
   if (checkpoints_.empty()) {
-    map_.Clear();
+    map_.Restore(initial_map_.TakeSnapshot());  // empty unless mapping continues a loaded map
   } else {
     map_.Restore(checkpoints_.back().map);
     start = checkpoints_.back().keyframes;
   }
-  ScanInsertionParams insertion;
-  insertion.shapes = params_.shapes;
-  insertion.visibility = params_.visibility;
-  insertion.visibility_fov_margin_rad = params_.visibility_fov_margin_rad;
-  insertion.map_update = params_.map_update;
+  const ScanInsertionParams insertion = ToScanInsertionParams(params_);
   for (std::size_t k = start; k < keyframes_.size(); ++k) {
     Keyframe& kf = keyframes_[k];
     kf.T_map_robot_in_map = graph_.Node(places_[k].node);

@@ -49,7 +49,9 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "max_untrusted_coverage", "an unconfirmed scan updates the map only if less than this fraction of it is near the map", &p.max_untrusted_coverage},
       {"pipeline", "new_territory_distance_m", "'near the map' distance of that rule (m)", &p.new_territory_distance_m},
       {"pipeline", "min_inlier_ratio", "a match is trusted when this fraction of the scan lies on the map after it", &p.min_inlier_ratio},
-      {"pipeline", "fast_track_min_fit", "take the refined prediction without shape matching when this fraction of the scan fits the map (above 1: always shape-match)", &p.fast_track_min_fit},
+      {"pipeline", "fast_track_min_fit", "with odometry, take the refined prediction without shape matching when this fraction of the scan fits the map (above 1: always shape-match) ...", &p.fast_track_min_fit},
+      {"pipeline", "fast_track_max_correction_m", "... and it lies within this of the prediction (m) ...", &p.fast_track_max_correction_m},
+      {"pipeline", "fast_track_max_correction_rad", "... and this (rad)", &p.fast_track_max_correction_rad},
       {"pipeline", "coarse_gate_m", "the refinement against the whole visible map starts with this wider gate (m)", &p.coarse_gate_m},
       {"pipeline", "index_cell_size_m", "cell size of the map's spatial index (m)", &p.index_cell_size_m},
       {"visibility", "max_range_m", "map polylines farther than this from the sensor are not visible (m)", &p.visibility.max_range_m},
@@ -193,6 +195,37 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
   };
 }
 
+// The localizer's own settings (`shape-slam localize`, the first scan of `run --map`); its
+// per-scan stages are the mapper's keys above.
+std::vector<Field> LocalizerFields(LocalizerParams& p) {
+  return {
+      {"localizer", "min_inlier_ratio", "a scan is matched when its refined pose explains this fraction of it", &p.min_inlier_ratio},
+      {"localizer", "min_global_fit", "a pose of the global search is accepted once its fit reaches this", &p.min_global_fit},
+      {"localizer", "global_tile_half_m", "global search: window centres on a grid over the map, every 2 * this (m)", &p.global_tile_half_m},
+      {"localizer", "global_resolution_m", "... cell size of its likelihood field (m)", &p.global_resolution_m},
+      {"localizer", "global_hit_sigma_m", "... width of its likelihood around the polylines (m)", &p.global_hit_sigma_m},
+      {"localizer", "global_max_step_range_m", "... its angular step moves samples at this range by one cell (m)", &p.global_max_step_range_m},
+      {"localizer", "global_node_evaluations", "... search nodes scored per window centre", &p.global_node_evaluations},
+      {"localizer", "global_hypotheses", "... poses verified at most (best fit first, distinct)", &p.global_hypotheses},
+      {"localizer", "max_hypotheses", "hypotheses kept between scans while ambiguous", &p.max_hypotheses},
+      {"localizer", "distinct_m", "hypotheses closer than this (m) ...", &p.distinct_m},
+      {"localizer", "distinct_rad", "... and this (rad) are one", &p.distinct_rad},
+      {"localizer", "evidence_decay", "evidence per scan: this * evidence + the scan samples a hypothesis explains", &p.evidence_decay},
+      {"localizer", "ambiguous_margin_samples", "ambiguous while another hypothesis's evidence is within this many samples of the best's", &p.ambiguous_margin_samples},
+      {"localizer", "lost_after_scans", "lost after this many consecutive scans without a trusted match", &p.lost_after_scans},
+      {"localizer", "fit_drop_ratio", "lost when the fit stays below this times its running mean ...", &p.fit_drop_ratio},
+      {"localizer", "fit_drop_scans", "... for this many consecutive scans ...", &p.fit_drop_scans},
+      {"localizer", "fit_mean_weight", "... the running mean weighting each scan by this", &p.fit_mean_weight},
+  };
+}
+
+// Every key of the ini file: the mapper's stages, then the localizer's own.
+std::vector<Field> AllFields(LocalizerParams& p) {
+  std::vector<Field> fields = Fields(p.stages);
+  for (Field& f : LocalizerFields(p)) fields.push_back(f);
+  return fields;
+}
+
 std::string Trim(const std::string& s) {
   const std::size_t a = s.find_first_not_of(" \t\r");
   if (a == std::string::npos) return "";
@@ -247,10 +280,10 @@ std::string ValueText(const Field& field) {
 
 }  // namespace
 
-ShapeSlamParams ParseParamsIni(const std::string& text, const std::string& name,
-                               const ShapeSlamParams& defaults) {
-  ShapeSlamParams params = defaults;
-  const std::vector<Field> fields = Fields(params);
+LocalizerParams ParseLocalizerParamsIni(const std::string& text, const std::string& name,
+                                        const LocalizerParams& defaults) {
+  LocalizerParams params = defaults;
+  const std::vector<Field> fields = AllFields(params);
   std::set<std::string> sections, seen;
   for (const Field& f : fields) sections.insert(f.section);
   std::istringstream in(text);
@@ -288,25 +321,43 @@ ShapeSlamParams ParseParamsIni(const std::string& text, const std::string& name,
   return params;
 }
 
-ShapeSlamParams LoadParamsIni(const std::string& path) {
+LocalizerParams LoadLocalizerParamsIni(const std::string& path) {
   std::error_code ec;
   if (std::filesystem::is_directory(path, ec)) throw ConfigError(path + ": is a directory");
   std::ifstream in(path);
   if (!in) throw ConfigError(path + ": cannot open the configuration file");
   std::ostringstream text;
   text << in.rdbuf();
-  return ParseParamsIni(text.str(), path);
+  return ParseLocalizerParamsIni(text.str(), path);
+}
+
+ShapeSlamParams ParseParamsIni(const std::string& text, const std::string& name,
+                               const ShapeSlamParams& defaults) {
+  LocalizerParams with_defaults;
+  with_defaults.stages = defaults;
+  return ParseLocalizerParamsIni(text, name, with_defaults).stages;
+}
+
+ShapeSlamParams LoadParamsIni(const std::string& path) {
+  return LoadLocalizerParamsIni(path).stages;
 }
 
 std::string FormatParamsIni(const ShapeSlamParams& params) {
-  ShapeSlamParams copy = params;
+  LocalizerParams with_defaults;
+  with_defaults.stages = params;
+  return FormatParamsIni(with_defaults);
+}
+
+std::string FormatParamsIni(const LocalizerParams& params) {
+  LocalizerParams copy = params;
   std::ostringstream out;
-  out << "# ShapeSLAM parameters (shape-slam run --config FILE.ini). Every key is optional: a\n"
-         "# missing key keeps the default shown here. Units are in the key names (_m metres,\n"
-         "# _rad radians). Unknown keys are errors. Paper sections refer to Wolter & Latecki,\n"
-         "# \"Shape-Based Robot Mapping\".\n";
+  out << "# ShapeSLAM parameters (shape-slam run|localize --config FILE.ini). Every key is\n"
+         "# optional: a missing key keeps the default shown here. Units are in the key names (_m\n"
+         "# metres, _rad radians). Unknown keys are errors. Paper sections refer to Wolter &\n"
+         "# Latecki, \"Shape-Based Robot Mapping\". [localizer] is read by localize and by the\n"
+         "# first scans of run --map; every other section by all of them.\n";
   std::string section;
-  for (const Field& f : Fields(copy)) {
+  for (const Field& f : AllFields(copy)) {
     if (section != f.section) {
       section = f.section;
       out << "\n[" << section << "]\n";

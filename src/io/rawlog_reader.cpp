@@ -161,9 +161,7 @@ struct RawlogReader::Impl {
   internal::ReaderBookkeeping bookkeeping;
   std::deque<PendingScan> pending;    // scans read, not yet delivered
   std::size_t next_entry = 0;         // index of the next top-level entry
-  bool awaiting_frame = false;        // an action collection was read: take the next frame
   std::optional<Pose2> T_odom_robot;  // odometry so far (increments or absolute)
-  std::size_t skipped_frames = 0;     // sensory frames not preceded by an action collection
   bool finished = false;
 };
 
@@ -204,7 +202,6 @@ void RawlogReader::Impl::Dispatch(const mrpt::serialization::CSerializable::Ptr&
                                   std::size_t index) {
   if (const auto actions = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(object)) {
     ApplyActions(*actions, index);
-    awaiting_frame = true;
   } else if (const auto frame = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(object)) {
     TakeFrame(*frame, index);
   } else if (const auto observation = std::dynamic_pointer_cast<mrpt::obs::CObservation>(object)) {
@@ -224,15 +221,11 @@ void RawlogReader::Impl::ApplyActions(const mrpt::obs::CActionCollection& action
   T_odom_robot = T_odom_robot.value_or(Pose2()) * ToPose2(increment);
 }
 
+// Every frame is used. MRPT pairs each frame with the odometry action before it (and its
+// CRawlog reader drops a frame without one, such as the first of MRPT's sample log); such a frame
+// gets no odometry increment: the odometry so far, the origin before the first action.
 void RawlogReader::Impl::TakeFrame(const mrpt::obs::CSensoryFrame& frame, std::size_t index) {
-  if (!awaiting_frame) {
-    ++skipped_frames;
-    bookkeeping.Note(Where(index),
-                     "sensory frame skipped: not preceded by an action collection (MRPT pairs "
-                     "each frame with the odometry action before it)");
-    return;
-  }
-  awaiting_frame = false;
+  if (!T_odom_robot) T_odom_robot = Pose2();
   for (const mrpt::obs::CObservation::Ptr& observation : frame) {
     if (observation) HandleObservation(*observation, index);
   }
@@ -262,10 +255,6 @@ void RawlogReader::Impl::HandleObservation(const mrpt::obs::CObservation& observ
 std::string RawlogReader::Impl::NoScanMessage() const {
   std::string message = path + ": no laser scans (CObservation2DRangeScan) found in " +
                         std::to_string(next_entry) + " entries";
-  if (skipped_frames > 0) {
-    message += "; " + std::to_string(skipped_frames) +
-               " sensory frames were skipped: not preceded by an action collection";
-  }
   if (bookkeeping.stats().skipped_records > 0) {
     message += "; " + std::to_string(bookkeeping.stats().skipped_records) + " malformed records";
   }

@@ -15,6 +15,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "shape_slam/scan_insertion.h"
 #include "shape_slam_io/params_ini.h"
 #include "shape_slam_mrpt/conversions.h"
 
@@ -83,6 +84,9 @@ void CMetricMapBuilderShape::LoadOptions(const mrpt::config::CConfigFileBase& so
 void CMetricMapBuilderShape::Restart(const Pose2& T_world_map) {
   slam_ = std::make_unique<ShapeSlam>(options_.params);
   T_world_map_ = T_world_map;
+  initial_simplemap_.clear();
+  T_map_robot_start_ = Pose2();
+  pending_actions_.reset();
   T_odom_robot_.reset();
   T_odom_last_scan_.reset();
   last_report_.reset();
@@ -93,25 +97,74 @@ void CMetricMapBuilderShape::Restart(const Pose2& T_world_map) {
 
 void CMetricMapBuilderShape::initialize(const mrpt::maps::CSimpleMap& initialMap,
                                         const mrpt::poses::CPosePDF* x0) {
-  if (!initialMap.empty()) {
-    throw std::invalid_argument(
-        "shape_slam::CMetricMapBuilderShape::initialize: starting from a non-empty map is not "
-        "supported (the mapper cannot be seeded with a fixed map)");
-  }
-  const Pose2 T_world_map = x0 != nullptr ? ToPose2(x0->getMeanVal()) : Pose2();
-  if (!IsFinite(T_world_map)) {
+  const Pose2 T_world_x0 = x0 != nullptr ? ToPose2(x0->getMeanVal()) : Pose2();
+  if (!IsFinite(T_world_x0)) {
     throw std::invalid_argument("shape_slam::CMetricMapBuilderShape::initialize: x0 not finite");
   }
-  Restart(T_world_map);
+  if (initialMap.empty()) {
+    Restart(T_world_x0);  // the map frame at x0
+    return;
+  }
+  const PolylineMap map = MapFromSimplemap(initialMap);  // checks every frame's pose
+  const Pose2 T_world_robot =
+      x0 != nullptr ? T_world_x0 : ToPose2(initialMap.rbegin()->pose->getMeanVal());
+  InitializeFromMap(map, T_world_robot);
+  initial_simplemap_ = initialMap;
+}
+
+// The laser scans of every frame inserted at the frame's pose (the mean of its PDF), trusted, in
+// the simplemap's order.
+PolylineMap CMetricMapBuilderShape::MapFromSimplemap(
+    const mrpt::maps::CSimpleMap& simplemap) const {
+  PolylineMap map(options_.params.index_cell_size_m);
+  const ScanInsertionParams insertion = ToScanInsertionParams(options_.params);
+  std::size_t frame = 0;
+  for (const mrpt::maps::CSimpleMap::Pair& pair : simplemap) {
+    const std::string where = "shape_slam::CMetricMapBuilderShape::initialize: initialMap frame " +
+                              std::to_string(frame++);
+    if (!pair.pose || !pair.sf) throw std::invalid_argument(where + " has no pose or no frame");
+    const Pose2 T_world_robot = ToPose2(pair.pose->getMeanVal());
+    if (!IsFinite(T_world_robot)) throw std::invalid_argument(where + ": pose not finite");
+    for (const mrpt::obs::CObservation::Ptr& observation : *pair.sf) {
+      const auto* range_scan =
+          dynamic_cast<const mrpt::obs::CObservation2DRangeScan*>(observation.get());
+      if (range_scan == nullptr) continue;
+      try {
+        InsertScan(map, ToLaserScan(*range_scan), T_world_robot, /*pose_trusted=*/true, insertion);
+      } catch (const std::invalid_argument& e) {
+        throw std::invalid_argument(where + ": " + e.what());
+      }
+    }
+  }
+  if (map.Empty()) {
+    throw std::invalid_argument(
+        "shape_slam::CMetricMapBuilderShape::initialize: initialMap gives no polylines (no "
+        "usable CObservation2DRangeScan)");
+  }
+  return map;
+}
+
+void CMetricMapBuilderShape::InitializeFromMap(const PolylineMap& map,
+                                               const Pose2& T_world_robot) {
+  if (!IsFinite(T_world_robot)) {
+    throw std::invalid_argument("shape_slam::CMetricMapBuilderShape: the robot pose is not finite");
+  }
+  auto slam = std::make_unique<ShapeSlam>(options_.params, map, T_world_robot);
+  Restart(Pose2());
+  slam_ = std::move(slam);
+  T_map_robot_start_ = T_world_robot;
 }
 
 void CMetricMapBuilderShape::processActionObservation(mrpt::obs::CActionCollection& action,
                                                       mrpt::obs::CSensoryFrame& observations) {
+  // Actions and frames: the odometry starts at the origin (a frame before any action has it).
+  Pose2 T_odom_robot = T_odom_robot_.value_or(Pose2());
   const mrpt::obs::CActionRobotMovement2D::Ptr movement = action.getBestMovementEstimation();
   if (movement && movement->poseChange) {
     const Pose2 increment = ToPose2(movement->poseChange->getMeanVal());
-    if (IsFinite(increment)) T_odom_robot_ = T_odom_robot_.value_or(Pose2()) * increment;
+    if (IsFinite(increment)) T_odom_robot = T_odom_robot * increment;
   }
+  T_odom_robot_ = T_odom_robot;
   for (const mrpt::obs::CObservation::Ptr& observation : observations) {
     if (observation) ProcessObservation(*observation);
   }
@@ -119,6 +172,26 @@ void CMetricMapBuilderShape::processActionObservation(mrpt::obs::CActionCollecti
 
 void CMetricMapBuilderShape::processObservation(const mrpt::obs::CObservation::Ptr& obs) {
   if (obs) ProcessObservation(*obs);
+}
+
+bool CMetricMapBuilderShape::ProcessRawlogEntry(
+    const mrpt::serialization::CSerializable::Ptr& entry) {
+  if (auto actions = std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(entry)) {
+    pending_actions_ = std::move(actions);
+    return false;
+  }
+  if (auto frame = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(entry)) {
+    mrpt::obs::CActionCollection::Ptr actions = std::move(pending_actions_);
+    if (!actions) actions = std::make_shared<mrpt::obs::CActionCollection>();
+    pending_actions_.reset();
+    processActionObservation(*actions, *frame);
+    return true;
+  }
+  if (auto observation = std::dynamic_pointer_cast<mrpt::obs::CObservation>(entry)) {
+    processObservation(observation);
+    return true;
+  }
+  return false;
 }
 
 // As the rawlog reader (rawlog_reader.cpp): odometry updates the odometry pose, a laser scan is
@@ -147,7 +220,7 @@ void CMetricMapBuilderShape::ProcessObservation(const mrpt::obs::CObservation& o
 
 // The last scan's pose, moved on by the odometry since then when the mapper uses odometry.
 Pose2 CMetricMapBuilderShape::CurrentPoseInMap() const {
-  if (!last_report_) return Pose2();
+  if (!last_report_) return T_map_robot_start_;
   Pose2 T_map_robot = last_report_->T_map_robot;
   if (slam_->Odometry().status == OdometryStatus::kUsed && T_odom_last_scan_ && T_odom_robot_) {
     T_map_robot = T_map_robot * (T_odom_last_scan_->Inverse() * *T_odom_robot_);
@@ -179,7 +252,7 @@ void CMetricMapBuilderShape::Finish() {
 }
 
 unsigned int CMetricMapBuilderShape::getCurrentlyBuiltMapSize() {
-  return static_cast<unsigned int>(keyframes_);
+  return static_cast<unsigned int>(initial_simplemap_.size() + keyframes_);
 }
 
 }  // namespace shape_slam

@@ -30,7 +30,11 @@ PolylineMap InWorldFrame(const PolylineMap& map_map, const Pose2& T_world_map,
 }  // namespace
 
 void CMetricMapBuilderShape::getCurrentlyBuiltMap(mrpt::maps::CSimpleMap& out_map) const {
-  out_map = io::MakeMrptSimplemap(slam_->Keyframes(), T_world_map_);
+  out_map = initial_simplemap_;
+  for (const mrpt::maps::CSimpleMap::Pair& pair :
+       io::MakeMrptSimplemap(slam_->Keyframes(), T_world_map_)) {
+    out_map.insert(pair);
+  }
 }
 
 const mrpt::maps::CMultiMetricMap* CMetricMapBuilderShape::getCurrentlyBuiltMetricMap() const {

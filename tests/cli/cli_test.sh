@@ -6,25 +6,8 @@ set -uo pipefail
 BIN=$1
 DATA=$2
 SENA="/usr/share/mrpt/datasets/2006-01ENE-21-SENA_Telecom Faculty_one_loop_only.rawlog"
-WORK=$(mktemp -d)
-trap 'rm -rf "$WORK"' EXIT
-failures=0
-fail() { echo "FAIL: $*"; failures=$((failures + 1)); }
-
-# expect CODE PATTERN -- command...: exit code CODE and PATTERN (grep -E) in stdout+stderr.
-expect() {
-  local code=$1 pattern=$2
-  shift 3
-  local out rc
-  out=$("$@" 2>&1)
-  rc=$?
-  if [ "$rc" -ne "$code" ]; then
-    fail "'$*' exited $rc, expected $code; output: ${out:0:400}"
-  elif ! grep -Eiq -- "$pattern" <<<"$out"; then
-    fail "'$*' output lacks /$pattern/: ${out:0:400}"
-  fi
-  if [ "$rc" -ge 128 ]; then fail "'$*' crashed (signal $((rc - 128)))"; fi
-}
+# WORK, fail, pass, expect CODE PATTERN -- command...
+source "$(dirname "${BASH_SOURCE[0]}")/checks.sh"
 
 # Help everywhere.
 expect 0 "Commands:" -- "$BIN" --help
@@ -123,7 +106,8 @@ expect 0 "" -- "$BIN" run "$WORK/noscan.log" --out "$WORK/noscan" --quiet
 SEGV_LOG="$DATA/../../fuzz/findings/rawlog_reader/mrpt_segv_action_movement.rawlog"
 sanitized=$(ldd "$BIN" 2>/dev/null | grep -c libasan || true)  # not grep -q: pipefail + SIGPIPE
 if [ -f "$SEGV_LOG" ] && [ "$sanitized" = "0" ]; then
-  expect 1 "fatal signal.*reading the log" -- "$BIN" extract "$SEGV_LOG" --scan 0
+  # scan 0 is the frame before the corrupt action collection; scan 1 needs that entry.
+  expect 1 "fatal signal.*reading the log" -- "$BIN" extract "$SEGV_LOG" --scan 1
 fi
 
 # A log whose odometry is all zero (how real logs without odometry look): noticed, said on

@@ -1,5 +1,6 @@
-// The parameter ini (params_ini.h): config/default.ini is exactly the defaults, formatting and
-// parsing round-trip, and every kind of broken ini is an error naming the key.
+// The parameter ini (params_ini.h): config/default.ini is exactly the defaults (the mapper's and
+// the localizer's), formatting and parsing round-trip, and every kind of broken ini is an error
+// naming the key.
 #include "shape_slam_io/params_ini.h"
 
 #include <gmock/gmock.h>
@@ -64,10 +65,57 @@ TEST(ParamsIniTest, BrokenIniFilesNameTheProblem) {
   EXPECT_THAT(ErrorOf("[dce]\njust some words\n"), HasSubstr("test.ini:2"));
 }
 
+// [localizer]: LocalizerParams' own fields, read with the mapper's stages from one file.
+TEST(ParamsIniTest, LocalizerKeysSetTheLocalizerAndTheStagesStayTheMappers) {
+  const LocalizerParams p = ParseLocalizerParamsIni(
+      "[localizer]\nmin_global_fit = 0.75\nlost_after_scans = 5\n[dce]\nthreshold_m = 0.07\n",
+      "loc.ini");
+  EXPECT_EQ(p.min_global_fit, 0.75);
+  EXPECT_EQ(p.lost_after_scans, 5);
+  EXPECT_EQ(p.stages.shapes.dce.threshold_m, 0.07);
+  EXPECT_EQ(p.global_tile_half_m, LocalizerParams{}.global_tile_half_m);  // not given: default
+  // The mapper's reader accepts (and checks) the section too: one file serves both commands.
+  EXPECT_EQ(ParseParamsIni("[localizer]\nmin_global_fit = 0.75\n", "x.ini").shapes.dce.threshold_m,
+            ShapeSlamParams{}.shapes.dce.threshold_m);
+}
+
+TEST(ParamsIniTest, LocalizerRoundTripsAndItsDefaultsAreInTheDefaultIni) {
+  LocalizerParams p;
+  p.evidence_decay = 0.55;
+  p.max_hypotheses = 6;
+  p.stages.use_odometry = false;
+  const std::string text = FormatParamsIni(p);
+  EXPECT_THAT(text, HasSubstr("[localizer]\n"));
+  const LocalizerParams q = ParseLocalizerParamsIni(text, "round-trip.ini");
+  EXPECT_EQ(q.evidence_decay, 0.55);
+  EXPECT_EQ(q.max_hypotheses, 6);
+  EXPECT_FALSE(q.stages.use_odometry);
+  EXPECT_EQ(FormatParamsIni(q), text);
+  EXPECT_EQ(FormatParamsIni(LocalizerParams{}), FormatParamsIni(ShapeSlamParams{}));
+}
+
+TEST(ParamsIniTest, BrokenLocalizerKeysNameTheKeyAndTheField) {
+  EXPECT_THAT(ErrorOf("[localizer]\nmin_global_fitt = 0.5\n"),
+              HasSubstr("unknown key 'min_global_fitt' in [localizer]"));
+  EXPECT_THAT(ErrorOf("[localizer]\nmax_hypotheses = many\n"),
+              HasSubstr("localizer.max_hypotheses = 'many': expected an integer"));
+  EXPECT_THAT(ErrorOf("[localizer]\nmin_global_fit = 1.5\n"),
+              HasSubstr("LocalizerParams::min_global_fit must be in [0"));
+  EXPECT_THAT(ErrorOf("[localizer]\nlost_after_scans = 0\n"),
+              HasSubstr("LocalizerParams::lost_after_scans must be >= 1"));
+  try {
+    ParseLocalizerParamsIni("[localizer]\ndistinct_rad = -1\n", "loc.ini");
+    ADD_FAILURE() << "a negative distinct_rad was accepted";
+  } catch (const ConfigError& e) {
+    EXPECT_THAT(e.what(), HasSubstr("loc.ini: invalid parameters: LocalizerParams::distinct_rad"));
+  }
+}
+
 TEST(ParamsIniTest, MissingFileIsAConfigError) {
   EXPECT_THROW(LoadParamsIni("/nonexistent/dir/x.ini"), ConfigError);
   testing::TempDir dir;
   EXPECT_THROW(LoadParamsIni(dir.path()), ConfigError);
+  EXPECT_THROW(LoadLocalizerParamsIni("/nonexistent/dir/x.ini"), ConfigError);
 }
 
 }  // namespace

@@ -150,7 +150,7 @@ TEST(RawlogReaderTest, SampleLogScansBeamsMountingAndOdometry) {
   const std::unique_ptr<LogReader> reader = OpenLog(kSena);
   EXPECT_EQ(reader->Format(), "rawlog");
   const std::vector<LaserScan> scans = ReadAll(*reader);
-  ASSERT_EQ(scans.size(), 224u);
+  ASSERT_EQ(scans.size(), 225u);
   for (const LaserScan& scan : scans) {
     ASSERT_EQ(scan.ranges_m.size(), 361u);
     EXPECT_EQ(scan.max_range_m, 80.0);
@@ -161,34 +161,36 @@ TEST(RawlogReaderTest, SampleLogScansBeamsMountingAndOdometry) {
   EXPECT_NEAR(scans.front().angles_rad.back(), M_PI_2, 1e-6);
   EXPECT_GT(scans.front().timestamp_s, 1.1e9);  // January 2006, seconds since 1970
   EXPECT_LT(scans.front().timestamp_s, 1.2e9);
-  // The first entry is a sensory frame before any action: skipped, as MRPT's tools do.
+  // The first entry is a sensory frame before any action (MRPT's CRawlog drops it): used, at
+  // the odometry origin, and nothing to warn about.
+  ExpectPose(*scans.front().T_odom_robot, 0.0, 0.0, 0.0, 0.0);
   const LogReaderStats& stats = reader->Stats();
-  EXPECT_EQ(stats.scans, 224u);
+  EXPECT_EQ(stats.scans, 225u);
   EXPECT_EQ(stats.skipped_records, 0u);
   EXPECT_EQ(stats.non_monotonic_timestamps, 0u);
-  ASSERT_EQ(stats.issues.size(), 1u);
-  EXPECT_EQ(stats.issues[0].where, kSena + ": entry 0");
-  EXPECT_THAT(stats.issues[0].message, HasSubstr("sensory frame skipped"));
+  EXPECT_TRUE(stats.issues.empty());
 }
 
+// MRPT's CRawlog drops the first frame (no action before it); every later scan is the same.
 TEST(RawlogReaderTest, SampleLogMatchesMrptsOwnReadingScanByScan) {
   const std::vector<MrptScan> expected = ReadWithMrpt(kSena);
   RawlogReader reader(kSena);
   const std::vector<LaserScan> scans = ReadAll(reader);
-  ASSERT_EQ(scans.size(), expected.size());
-  for (std::size_t k = 0; k < scans.size(); ++k) {
+  ASSERT_EQ(scans.size(), expected.size() + 1);
+  EXPECT_LT(scans[0].timestamp_s, mrpt::Clock::toDouble(expected[0].scan->timestamp));
+  for (std::size_t k = 0; k < expected.size(); ++k) {
     SCOPED_TRACE(k);
     const CObservation2DRangeScan& obs = *expected[k].scan;
-    EXPECT_EQ(scans[k].timestamp_s, mrpt::Clock::toDouble(obs.timestamp));
-    ExpectSameRanges(scans[k], obs);
+    EXPECT_EQ(scans[k + 1].timestamp_s, mrpt::Clock::toDouble(obs.timestamp));
+    ExpectSameRanges(scans[k + 1], obs);
     const mrpt::poses::CPose2D& odometry = expected[k].odometry;
-    ExpectPose(*scans[k].T_odom_robot, odometry.x(), odometry.y(), odometry.phi(), 1e-9);
+    ExpectPose(*scans[k + 1].T_odom_robot, odometry.x(), odometry.y(), odometry.phi(), 1e-9);
   }
   // The robot drives a loop of tens of metres: the odometry is really accumulated.
   EXPECT_GT(std::hypot(expected[112].odometry.x(), expected[112].odometry.y()), 5.0);
-  for (std::size_t k = 0; k < scans.size(); k += 37) {
+  for (std::size_t k = 0; k < expected.size(); k += 37) {
     SCOPED_TRACE(k);
-    ExpectSameGeometryAsMrpt(scans[k], *expected[k].scan);
+    ExpectSameGeometryAsMrpt(scans[k + 1], *expected[k].scan);
   }
 }
 
@@ -366,16 +368,26 @@ TEST(RawlogReaderTest, RawlogsWithoutUsableScansThrow) {
               ThrowsMessage<LogError>(HasSubstr(
                   comments + ": no laser scans (CObservation2DRangeScan) found in 2 entries")));
 
-  // Sensory frames without actions: MRPT pairs frames with actions and so reads nothing.
+  EXPECT_THAT([&] { RawlogReader reader(kLogs + "/intel_head.log"); },
+              ThrowsMessage<LogError>(HasSubstr("not an MRPT rawlog")));
+}
+
+// Sensory frames without actions (MRPT's CRawlog pairs frames with actions and reads nothing):
+// every frame is a scan with no odometry increment, so the odometry stays at the origin.
+TEST(RawlogReaderTest, SensoryFramesWithoutActionsAreScansAtTheOdometrySoFar) {
+  TempDir dir;
   auto frame = std::make_shared<mrpt::obs::CSensoryFrame>();
   frame->insert(CopyOfFirstSenaScan());
   const std::string frames = dir.Path("frames.rawlog");
   WriteRawlog(frames, {frame, frame});
-  EXPECT_THAT([&] { OpenLog(frames); },
-              ThrowsMessage<LogError>(HasSubstr("2 sensory frames were skipped")));
-
-  EXPECT_THAT([&] { RawlogReader reader(kLogs + "/intel_head.log"); },
-              ThrowsMessage<LogError>(HasSubstr("not an MRPT rawlog")));
+  const std::unique_ptr<LogReader> reader = OpenLog(frames);
+  const std::vector<LaserScan> scans = ReadAll(*reader);
+  ASSERT_EQ(scans.size(), 2u);
+  for (const LaserScan& scan : scans) {
+    ASSERT_TRUE(scan.T_odom_robot.has_value());
+    ExpectPose(*scan.T_odom_robot, 0.0, 0.0, 0.0, 0.0);
+  }
+  EXPECT_TRUE(reader->Stats().issues.empty());
 }
 
 #endif  // SHAPE_SLAM_HAVE_MRPT

@@ -35,31 +35,48 @@ const std::string kObsOnlyLog =
 
 bool Readable(const std::string& path) { return std::ifstream(path).good(); }
 
-// icp-slam's loop over (the first max_entries entries of) a rawlog; returns the pose estimate
-// after every entry.
+// icp-slam's loop over (the steps [first_step, max_steps) of) a rawlog, entry by entry as
+// mrpt-map-builder reads it (ProcessRawlogEntry: a sensory frame without an action before it is
+// used, where CRawlog drops it); returns the pose estimate after every step fed.
+// `closures`, if given, gets the builder's loop-closure count after each step it took.
 std::vector<mrpt::poses::CPose3D> FeedLikeIcpSlam(CMetricMapBuilderShape& builder,
                                                   const std::string& path,
-                                                  std::size_t max_entries = SIZE_MAX) {
+                                                  std::size_t max_steps = SIZE_MAX,
+                                                  std::size_t first_step = 0,
+                                                  std::vector<int>* closures = nullptr) {
   mrpt::io::CFileGZInputStream file(path);
   auto archive = mrpt::serialization::archiveFrom(file);
   std::vector<mrpt::poses::CPose3D> poses;
-  std::size_t entry = 0;
-  while (poses.size() < max_entries) {
-    mrpt::obs::CActionCollection::Ptr actions;
-    mrpt::obs::CSensoryFrame::Ptr frame;
-    mrpt::obs::CObservation::Ptr observation;
-    if (!mrpt::obs::CRawlog::getActionObservationPairOrObservation(archive, actions, frame,
-                                                                   observation, entry)) {
+  CMetricMapBuilderShape skipped;  // takes the steps before first_step
+  for (std::size_t step = 0; step < max_steps;) {
+    mrpt::serialization::CSerializable::Ptr entry;
+    try {
+      archive >> entry;
+    } catch (const mrpt::serialization::CExceptionEOF&) {
       break;
     }
-    if (observation) {
-      builder.processObservation(observation);
-    } else {
-      builder.processActionObservation(*actions, *frame);
-    }
+    CMetricMapBuilderShape& target = step < first_step ? skipped : builder;
+    if (!target.ProcessRawlogEntry(entry)) continue;
+    if (step++ < first_step) continue;
     poses.push_back(builder.getCurrentPoseEstimation()->getMeanVal());
+    if (closures) closures->push_back(builder.Mapper().NumLoopClosures());
   }
   return poses;
+}
+
+// MRPT's own loop (CRawlog::getActionObservationPairOrObservation): the steps it gives.
+std::size_t StepsOfMrptsReader(const std::string& path) {
+  mrpt::io::CFileGZInputStream file(path);
+  auto archive = mrpt::serialization::archiveFrom(file);
+  mrpt::obs::CActionCollection::Ptr actions;
+  mrpt::obs::CSensoryFrame::Ptr frame;
+  mrpt::obs::CObservation::Ptr observation;
+  std::size_t entry = 0, steps = 0;
+  while (mrpt::obs::CRawlog::getActionObservationPairOrObservation(archive, actions, frame,
+                                                                   observation, entry)) {
+    ++steps;
+  }
+  return steps;
 }
 
 // What `shape-slam run` computes: the rawlog reader's scans through the mapper.
@@ -88,12 +105,14 @@ TEST(CMetricMapBuilderShape, SampleLogGivesTheTrajectoryOfShapeSlamRun) {
   const std::vector<mrpt::poses::CPose3D> online = FeedLikeIcpSlam(builder, kSenaLog);
   ShapeSlam reference;
   const std::vector<StampedPose> expected = RunLikeShapeSlam(kSenaLog, reference);
-  ASSERT_EQ(expected.size(), 224u);
+  // Every scan, the first frame (before any action) too; MRPT's reader drops that one.
+  ASSERT_EQ(expected.size(), 225u);
+  EXPECT_EQ(StepsOfMrptsReader(kSenaLog), 224u);
   ExpectSameTrajectory(builder.Mapper().Trajectory(), expected);
   EXPECT_EQ(builder.SkippedScans(), 0);
   EXPECT_EQ(builder.Mapper().Odometry().status, OdometryStatus::kUsed);
   EXPECT_EQ(builder.Mapper().Map().NumPolylines(), reference.Map().NumPolylines());
-  EXPECT_EQ(online.size(), 224u);  // one pair per scan in this log
+  EXPECT_EQ(online.size(), 225u);  // one frame per scan in this log
   // The online estimate after the last entry is the last scan's pose (no odometry after it);
   // a loop closure may have moved it since, but not by more than a few centimetres here.
   const Pose2 last = expected.back().pose;
@@ -170,15 +189,81 @@ TEST(CMetricMapBuilderShape, InitializeAtX0MovesEveryPoseAndThePolylines) {
   EXPECT_LT((T_world_map * p - q).norm(), 1e-9);
 }
 
-TEST(CMetricMapBuilderShape, InitializeFromANonEmptyMapIsRefused) {
-  CMetricMapBuilderShape builder;
-  FeedLikeIcpSlam(builder, kObsOnlyLog);
+// initialize(simplemap): the starting map is the simplemap's scans inserted at their poses
+// (the same polylines as CPolylineMap::loadFromSimpleMap, the same core insertion), the robot
+// starts at the last frame's pose, and the rest of the log continues that map.
+TEST(CMetricMapBuilderShape, InitializeFromASimplemapContinuesItsMap) {
+  if (!Readable(kSenaLog)) GTEST_SKIP() << kSenaLog << " missing (package mrpt-common)";
+  constexpr std::size_t kSteps = 100;
+  CMetricMapBuilderShape first;
+  FeedLikeIcpSlam(first, kSenaLog, kSteps);
   mrpt::maps::CSimpleMap simplemap;
-  builder.getCurrentlyBuiltMap(simplemap);
-  EXPECT_THROW(builder.initialize(simplemap), std::invalid_argument);
-  builder.initialize();  // restarts empty
-  EXPECT_EQ(builder.getCurrentlyBuiltMapSize(), 0u);
-  EXPECT_TRUE(builder.Mapper().Trajectory().empty());
+  first.getCurrentlyBuiltMap(simplemap);
+  ASSERT_GT(simplemap.size(), 10u);
+
+  CMetricMapBuilderShape continued;
+  continued.initialize(simplemap);
+  CPolylineMap oracle;
+  oracle.loadFromSimpleMap(simplemap);
+  const PolylineMap& start =
+      continued.getCurrentlyBuiltMetricMap()->mapByClass<CPolylineMap>()->Map();
+  ASSERT_EQ(start.NumPolylines(), oracle.Map().NumPolylines());
+  EXPECT_EQ(start.NumVertices(), oracle.Map().NumVertices());
+  const mrpt::poses::CPose3D at_start = continued.getCurrentPoseEstimation()->getMeanVal();
+  const mrpt::poses::CPose3D last_frame = simplemap.rbegin()->pose->getMeanVal();
+  EXPECT_EQ(at_start.x(), last_frame.x());
+  EXPECT_EQ(at_start.y(), last_frame.y());
+  EXPECT_EQ(continued.getCurrentlyBuiltMapSize(), simplemap.size());
+
+  // The rest of the log from the last keyframe on, against the whole log mapped at once: the
+  // online estimates of the two builders agree step by step until either closes a loop (on
+  // this log the whole run does, some 30-60 steps later): its pose graph then moves its early
+  // part, which the continued builder holds fixed as its loaded map (0.5 m apart after that,
+  // each consistent in its own frame).
+  const std::size_t last_keyframe_step = kSteps - 1;  // a keyframe every few steps: close by
+  std::vector<int> online_closures, reference_closures;
+  const std::vector<mrpt::poses::CPose3D> online =
+      FeedLikeIcpSlam(continued, kSenaLog, SIZE_MAX, last_keyframe_step, &online_closures);
+  CMetricMapBuilderShape whole;
+  const std::vector<mrpt::poses::CPose3D> reference =
+      FeedLikeIcpSlam(whole, kSenaLog, SIZE_MAX, 0, &reference_closures);
+  ASSERT_EQ(online.size() + last_keyframe_step, reference.size());
+  std::size_t compared = 0;
+  while (compared < online.size() && online_closures[compared] == online_closures.front() &&
+         reference_closures[last_keyframe_step + compared] ==
+             reference_closures[last_keyframe_step]) {
+    ++compared;
+  }
+  EXPECT_GE(compared, 20u);  // the comparison covers a stretch of the log
+  for (std::size_t i = 0; i < compared; ++i) {
+    const mrpt::poses::CPose3D& q = reference[last_keyframe_step + i];
+    EXPECT_LT(std::hypot(online[i].x() - q.x(), online[i].y() - q.y()), 0.05) << "step " << i;
+  }
+  mrpt::maps::CSimpleMap out;
+  continued.getCurrentlyBuiltMap(out);
+  EXPECT_EQ(out.size(), simplemap.size() + continued.Mapper().Keyframes().size());
+}
+
+TEST(CMetricMapBuilderShape, InitializeFromAMapStartsThereAndRefusesNothingToStartFrom) {
+  CMetricMapBuilderShape first;
+  FeedLikeIcpSlam(first, kObsOnlyLog);
+  const PolylineMap map = first.Mapper().Map();
+  CMetricMapBuilderShape seeded;
+  const Pose2 T_world_robot(0.3, -0.1, 0.2);
+  seeded.InitializeFromMap(map, T_world_robot);
+  EXPECT_EQ(seeded.getCurrentlyBuiltMetricMap()->mapByClass<CPolylineMap>()->Map().NumPolylines(),
+            map.NumPolylines());
+  EXPECT_EQ(seeded.getCurrentPoseEstimation()->getMeanVal().x(), T_world_robot.x);
+  EXPECT_THROW(seeded.InitializeFromMap(PolylineMap(), Pose2()), std::invalid_argument);
+  EXPECT_THROW(seeded.InitializeFromMap(map, Pose2(NAN, 0.0, 0.0)), std::invalid_argument);
+  // A simplemap whose frames hold no laser scan gives no map.
+  mrpt::maps::CSimpleMap no_scans;
+  no_scans.insert(mrpt::poses::CPose3DPDFGaussian::Create(mrpt::poses::CPose3D()),
+                  mrpt::obs::CSensoryFrame::Create());
+  EXPECT_THROW(seeded.initialize(no_scans), std::invalid_argument);
+  seeded.initialize();  // restarts empty
+  EXPECT_EQ(seeded.getCurrentlyBuiltMapSize(), 0u);
+  EXPECT_TRUE(seeded.Mapper().Map().Empty());
 }
 
 TEST(CMetricMapBuilderShape, LoadsOptionsFromAnIniSection) {
