@@ -237,9 +237,12 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   }
   // Unconfirmed: the prediction, which without odometry is the constant-velocity one (a robot
   // that was moving most likely still is).
-  if (!loc.trusted) loc.correction = odometry_delta ? Pose2() : velocity_hint.value_or(Pose2());
-  const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
-  loc.coverage = InlierRatio(samples, near, loc.correction);
+  // Its coverage decides whether it may still update the map (new territory).
+  if (!loc.trusted) {
+    loc.correction = odometry_delta ? Pose2() : velocity_hint.value_or(Pose2());
+    const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
+    loc.coverage = InlierRatio(samples, near, loc.correction);
+  }
   return loc;
 }
 

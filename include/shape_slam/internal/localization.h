@@ -54,7 +54,9 @@ struct Localization {
   int matched_pairs = 0;
   double inlier_ratio = 0.0;
   double rms_error_m = 0.0;
-  double coverage = 0.0;  ///< fraction of the scan within new_territory_distance_m of the model
+  /// Fraction of the scan within new_territory_distance_m of the model; computed only for a scan
+  /// without a trusted match (0 otherwise), the only case that reads it.
+  double coverage = 0.0;
   bool fast_track = false;  ///< taken from the prediction without shape matching
 };
 
