@@ -106,6 +106,10 @@ void SegmentGrid::Fill() {
   }
 }
 
+// The query's own cell first, then the neighbours that could still hold a segment at least as
+// near as the best so far (their rectangle within that distance and within the radius): near a
+// wall the own cell usually settles it. A segment is listed in every cell it crosses, so its
+// nearest point lies in a cell no farther than itself: the result is that of scanning all nine.
 SegmentMatch SegmentGrid::Nearest(const Point2& p) const {
   if (segments_.empty()) return SegmentMatch{};
   const double fx = std::floor((p.x() - origin_.x()) / cell_m_);
@@ -113,21 +117,33 @@ SegmentMatch SegmentGrid::Nearest(const Point2& p) const {
   // Outside the grid by more than a cell: no segment can be within the radius.
   if (!(fx >= -1.0 && fx <= nx_ && fy >= -1.0 && fy <= ny_)) return SegmentMatch{};
   const int cx = static_cast<int>(fx), cy = static_cast<int>(fy);
+  const double radius2 = radius_m_ * radius_m_;
   SegmentMatch best;
-  for (int iy = std::max(cy - 1, 0); iy <= std::min(cy + 1, ny_ - 1); ++iy) {
-    for (int ix = std::max(cx - 1, 0); ix <= std::min(cx + 1, nx_ - 1); ++ix) {
-      const int c = CellIndex(ix, iy);
-      for (int k = cell_begin_[c]; k < cell_begin_[c + 1]; ++k) {
-        const int i = cell_segments_[k];
-        const SegmentMatch m = MatchSegment(p, segments_[i], i);
-        if (m.squared_distance < best.squared_distance ||
-            (m.squared_distance == best.squared_distance && i < best.segment)) {
-          best = m;
-        }
+  const auto scan_cell = [&](int ix, int iy) {
+    const int c = CellIndex(ix, iy);
+    for (int k = cell_begin_[c]; k < cell_begin_[c + 1]; ++k) {
+      const int i = cell_segments_[k];
+      const SegmentMatch m = MatchSegment(p, segments_[i], i);
+      if (m.squared_distance < best.squared_distance ||
+          (m.squared_distance == best.squared_distance && i < best.segment)) {
+        best = m;
       }
     }
+  };
+  const bool inside = cx >= 0 && cx < nx_ && cy >= 0 && cy < ny_;
+  if (inside) scan_cell(cx, cy);
+  for (int iy = std::max(cy - 1, 0); iy <= std::min(cy + 1, ny_ - 1); ++iy) {
+    for (int ix = std::max(cx - 1, 0); ix <= std::min(cx + 1, nx_ - 1); ++ix) {
+      if (inside && ix == cx && iy == cy) continue;
+      const double x0 = origin_.x() + ix * cell_m_, y0 = origin_.y() + iy * cell_m_;
+      const double dx = std::max({0.0, x0 - p.x(), p.x() - (x0 + cell_m_)});
+      const double dy = std::max({0.0, y0 - p.y(), p.y() - (y0 + cell_m_)});
+      const double d2 = dx * dx + dy * dy;
+      if (d2 > best.squared_distance || d2 > radius2) continue;
+      scan_cell(ix, iy);
+    }
   }
-  if (best.squared_distance > radius_m_ * radius_m_) return SegmentMatch{};
+  if (best.squared_distance > radius2) return SegmentMatch{};
   return best;
 }
 
