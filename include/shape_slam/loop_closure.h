@@ -206,6 +206,11 @@ class LoopCloser {
                                 const std::vector<double>& graph_distance) const;
   std::optional<LoopClosure> MatchAt(const std::vector<LoopKeyframe>& keyframes,
                                      const PoseGraph& graph, int old, double graph_distance) const;
+  struct Sides;  // both sides of a candidate match (loop_closure.cpp)
+  /// The closure a refined match implies, if it passes the verification (both sides explain
+  /// each other, every direction constrained, correction within the uncertainty).
+  std::optional<LoopClosure> Verify(const Sides& sides, const RefinementResult& refined,
+                                    const PoseGraph& graph) const;
   double SearchRadius(double graph_distance_m) const;
   double CorrectionBoundM(double graph_distance_m) const;
   double CorrectionBoundRad(double graph_distance_m) const;

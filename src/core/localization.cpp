@@ -158,8 +158,16 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     return prior ? WithinPrior(T, *prior, params.max_prior_mahalanobis)
                  : WithinMotionBound(T, growth, params);
   };
+  // The estimate of a refinement, with its fit (inlier ratio) to the model.
+  const auto take = [&](const RefinementResult& refined, double fit) {
+    loc.correction = refined.T_map_scan;
+    loc.covariance = refined.covariance;
+    loc.rms_error_m = refined.rms_error_m;
+    loc.inlier_ratio = fit;
+    loc.trusted = fit >= params.min_inlier_ratio;
+  };
   // The visible map as shape matching sees it, derived only when shape matching runs.
-  std::vector<Polyline> map_coarse = model.map_coarse;
+  std::vector<Polyline> map_coarse;
   const auto localize = [&](const ShapeMatcherParams& matcher, double window_scale) {
     ShapeSlamParams p = params;
     p.matcher = matcher;
@@ -167,8 +175,7 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     if (map_coarse.empty()) {
       for (const Polyline& m : model.map) map_coarse.push_back(ForShapeMatching(m, params.shapes));
     }
-    const std::vector<Polyline>& visible_coarse = map_coarse;
-    for (const auto& [shape_model, cyclic] : {std::pair{&visible_coarse, model.map_cyclic},
+    for (const auto& [shape_model, cyclic] : {std::pair{&std::as_const(map_coarse), model.map_cyclic},
                                               std::pair{&model.recent_coarse, false}}) {
       if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, p,
                                   loc.matched_pairs)) {
@@ -195,11 +202,7 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
         selector.Rank(samples, candidates, reference, accept), selection.max_refinements, refine);
     if (!selected) return;
     const RefinementResult& refined = selected->second;
-    loc.correction = refined.T_map_scan;
-    loc.covariance = refined.covariance;
-    loc.rms_error_m = refined.rms_error_m;
-    loc.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
-    loc.trusted = loc.inlier_ratio >= params.min_inlier_ratio;
+    take(refined, selector.Fit(samples, refined.T_map_scan));
   };
   // The fast track (with odometry): the prediction alone, refined; shape matching only when it
   // falls short.
@@ -214,11 +217,7 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
         RefineAlignment(samples, all, fast.front().T_model_scan, prior, params.refinement);
     const double fit = refined.converged ? selector.Fit(samples, refined.T_map_scan) : 0.0;
     if (fit >= params.fast_track_min_fit && near_prediction(refined.T_map_scan)) {
-      loc.correction = refined.T_map_scan;
-      loc.covariance = refined.covariance;
-      loc.rms_error_m = refined.rms_error_m;
-      loc.inlier_ratio = fit;
-      loc.trusted = fit >= params.min_inlier_ratio;
+      take(refined, fit);
       loc.fast_track = true;
     }
   }

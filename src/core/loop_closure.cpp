@@ -298,6 +298,52 @@ std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& ke
   return MatchAt(keyframes, graph, old, GraphDistances(keyframes, graph, current)[old]);
 }
 
+// Both sides of a candidate match: the current keyframe's scan and the old place.
+struct LoopCloser::Sides {
+  const LoopKeyframe& now;
+  const LoopKeyframe& then;
+  int old = 0, current = 0;
+  double graph_distance = 0.0;
+  std::vector<Point2> samples, place_samples;  // scan and place, sampled for alignment
+  CandidateSelector selector;                   // fit of the scan to the place
+  internal::SegmentGrid scan_grid;              // fit of the place to the scan
+};
+
+std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides, const RefinementResult& refined,
+                                              const PoseGraph& graph) const {
+  // Verification: both sides explain each other ...
+  LoopClosure loop;
+  loop.inlier_ratio = sides.selector.Fit(sides.samples, refined.T_map_scan);
+  std::vector<Point2> place_in_scan;
+  const PointTransform T_scan_old(refined.T_map_scan.Inverse());
+  for (const Point2& q : sides.place_samples) place_in_scan.push_back(T_scan_old(q));
+  loop.reverse_inlier_ratio = VisibleInlierRatio(place_in_scan, sides.samples, sides.scan_grid);
+  if (loop.inlier_ratio < params_.min_inlier_ratio ||
+      loop.reverse_inlier_ratio < params_.min_reverse_inlier_ratio) {
+    return std::nullopt;
+  }
+  // ... the match constrains every direction (not along a featureless corridor) ...
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(refined.covariance.topLeftCorner<2, 2>());
+  if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > params_.max_match_sigma_m) {
+    return std::nullopt;
+  }
+  // ... and the correction lies within the uncertainty (drift is bounded; a corridor turned
+  // by 180 deg, a parallel corridor far off are not).
+  const Pose2 T_old_now = graph.Node(sides.then.node).Inverse() * graph.Node(sides.now.node);
+  loop.edge = {sides.then.node, sides.now.node,
+               sides.then.T_robot_sensor * refined.T_map_scan * sides.now.T_robot_sensor.Inverse(),
+               EdgeCovariance(refined.covariance, params_), true};
+  loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
+  loop.old_keyframe = sides.old;
+  loop.new_keyframe = sides.current;
+  loop.graph_distance_m = sides.graph_distance;
+  if (std::abs(loop.correction.theta) > CorrectionBoundRad(sides.graph_distance) ||
+      loop.correction.Translation().norm() > CorrectionBoundM(sides.graph_distance)) {
+    return std::nullopt;
+  }
+  return loop;
+}
+
 std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& keyframes,
                                                const PoseGraph& graph, int old,
                                                double graph_distance) const {
@@ -307,65 +353,40 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   if (now.shapes.coarse.empty() || then.shapes.coarse.empty()) return std::nullopt;
   const Place place = OldPlace(keyframes, graph, old, params_);
   const double spacing = match_.matcher.alignment.sample_spacing_m;
-  const std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
-  const std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
+  std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
+  std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
   if (samples.empty() || place_samples.empty()) return std::nullopt;
 
   const Pose2 estimate = SensorPose(keyframes, graph, old).Inverse() * SensorPose(keyframes, graph, current);
   CandidateSelectionParams selection = match_.selection;
   selection.capture_distance_m = match_.coarse_gate_m;
   selection.inlier_distance_m = match_.matcher.inlier_distance_m;
-  const CandidateSelector selector(place.fine, selection);
-  const internal::SegmentGrid scan_grid(internal::MakeModelSegments(now.shapes.fine),
-                                        match_.matcher.inlier_distance_m);
+  const Sides sides{now,
+                    then,
+                    old,
+                    current,
+                    graph_distance,
+                    std::move(samples),
+                    std::move(place_samples),
+                    CandidateSelector(place.fine, selection),
+                    internal::SegmentGrid(internal::MakeModelSegments(now.shapes.fine),
+                                          match_.matcher.inlier_distance_m)};
+  const CandidateSelector& selector = sides.selector;
   const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
-    RefinementResult refined = internal::RefineAgainstMap(samples, place.fine, c.T_model_scan,
+    RefinementResult refined = internal::RefineAgainstMap(sides.samples, place.fine, c.T_model_scan,
                                                           std::nullopt, match_.refinement,
                                                           match_.coarse_gate_m);
     if (!refined.converged) return std::nullopt;
     return refined;
   };
-  const auto verified = [&](const RefinementResult& refined) -> std::optional<LoopClosure> {
-    // Verification: both sides explain each other ...
-    LoopClosure loop;
-    loop.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
-    std::vector<Point2> place_in_scan;
-    const PointTransform T_scan_old(refined.T_map_scan.Inverse());
-    for (const Point2& q : place_samples) place_in_scan.push_back(T_scan_old(q));
-    loop.reverse_inlier_ratio = VisibleInlierRatio(place_in_scan, samples, scan_grid);
-    if (loop.inlier_ratio < params_.min_inlier_ratio ||
-        loop.reverse_inlier_ratio < params_.min_reverse_inlier_ratio) {
-      return std::nullopt;
-    }
-    // ... the match constrains every direction (not along a featureless corridor) ...
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(refined.covariance.topLeftCorner<2, 2>());
-    if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > params_.max_match_sigma_m) {
-      return std::nullopt;
-    }
-    // ... and the correction lies within the uncertainty (drift is bounded; a corridor turned
-    // by 180 deg, a parallel corridor far off are not).
-    const Pose2 T_old_now = graph.Node(then.node).Inverse() * graph.Node(now.node);
-    loop.edge = {then.node, now.node,
-                 then.T_robot_sensor * refined.T_map_scan * now.T_robot_sensor.Inverse(),
-                 EdgeCovariance(refined.covariance, params_), true};
-    loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
-    loop.old_keyframe = old;
-    loop.new_keyframe = current;
-    loop.graph_distance_m = graph_distance;
-    if (std::abs(loop.correction.theta) > CorrectionBoundRad(graph_distance) ||
-        loop.correction.Translation().norm() > CorrectionBoundM(graph_distance)) {
-      return std::nullopt;
-    }
-    return loop;
-  };
 
   // The quick check (not in the paper): where the graph is already right -- a place revisited
   // after its loop was closed -- the estimate itself fits; it is taken when the scan fits the
   // place at least quick_min_fit, without shape matching or window search.
-  const std::vector<RankedCandidate> quick = selector.Rank(samples, {estimate}, estimate);
+  const std::vector<RankedCandidate> quick = selector.Rank(sides.samples, {estimate}, estimate);
   if (!quick.empty() && quick.front().fit >= params_.quick_min_fit) {
     if (const std::optional<RefinementResult> refined = refine(quick.front())) {
-      std::optional<LoopClosure> loop = verified(*refined);
+      std::optional<LoopClosure> loop = Verify(sides, *refined, graph);
       if (loop && loop->inlier_ratio >= params_.quick_min_fit) return loop;
     }
   }
@@ -382,7 +403,7 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   const Pose2 centre = bound_m <= params_.window_half_m ? estimate : Pose2(0.0, 0.0, estimate.theta);
   const WindowSearch search(place.fine, window);
   const std::vector<Point2> coarse_samples =
-      internal::Thinned(samples, spacing, match_.window_search_spacing_m);
+      internal::Thinned(sides.samples, spacing, match_.window_search_spacing_m);
   const std::vector<WindowHypothesis> hypotheses = search.Search(coarse_samples, centre);
   double best_window_fit = 0.0;
   for (const WindowHypothesis& h : hypotheses) best_window_fit = std::max(best_window_fit, h.fit);
@@ -396,10 +417,10 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   for (const WindowHypothesis& h : hypotheses) candidates.push_back(h.T_model_scan);
   // Among fits that explain the scan about equally well the one nearest the estimate wins:
   // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
-  const auto selected = SelectRefined<RefinementResult>(selector.Rank(samples, candidates, estimate),
+  const auto selected = SelectRefined<RefinementResult>(selector.Rank(sides.samples, candidates, estimate),
                                                         selection.max_refinements, refine);
   if (!selected) return std::nullopt;
-  return verified(selected->second);
+  return Verify(sides, selected->second, graph);
 }
 
 // The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the

@@ -37,10 +37,9 @@ double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
 
 /// What a scan is localized against, in the sensor frame of the prediction.
 struct LocalModel {
-  std::vector<Polyline> map;            ///< visible map shape, CCW ordered
-  /// The same, as shape matching sees it; left empty, Localize derives it (ForShapeMatching)
-  /// only if shape matching runs (not for a scan the fast track places).
-  std::vector<Polyline> map_coarse;
+  /// Visible map shape, CCW ordered. Localize derives the shape-matching view of it
+  /// (ForShapeMatching) only if shape matching runs (not for a scan the fast track places).
+  std::vector<Polyline> map;
   bool map_cyclic = false;
   std::vector<Polyline> recent_coarse;  ///< last keyframe's polylines (shape matching)
   std::vector<Polyline> recent_fine;    ///< the same, finer (refinement)
