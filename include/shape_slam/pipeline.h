@@ -223,6 +223,10 @@ class ShapeSlam {
   /// Loop searches run so far, and closures they found before the consistency check.
   int NumLoopSearches() const { return loop_closer_.NumSearches(); }
   int NumLoopClosuresFound() const { return loop_closer_.NumFound(); }
+  /// Map rebuilds after a pose-graph optimisation moved keyframes, and the keyframes they
+  /// inserted again (the cost of keeping the map consistent with the graph).
+  int NumMapRebuilds() const { return num_rebuilds_; }
+  long long NumKeyframesReinserted() const { return num_reinserted_; }
   /// Whether the log's odometry was used (see OdometryStatus).
   const OdometryReport& Odometry() const { return odometry_; }
 
@@ -277,6 +281,8 @@ class ShapeSlam {
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;
   std::vector<MapCheckpoint> checkpoints_;  // increasing keyframes
+  int num_rebuilds_ = 0;
+  long long num_reinserted_ = 0;
   std::vector<LoopKeyframe> places_;  // the keyframes' shapes, node and travel (same order)
   LoopCloser loop_closer_;
   std::vector<ScanAnchor> anchors_;

@@ -286,6 +286,8 @@ void ShapeSlam::RebuildFrom(int first_moved) {
     start = checkpoints_.back().keyframes;
   }
   const ScanInsertionParams insertion = ToScanInsertionParams(params_);
+  ++num_rebuilds_;
+  num_reinserted_ += static_cast<long long>(keyframes_.size()) - start;
   for (std::size_t k = start; k < keyframes_.size(); ++k) {
     Keyframe& kf = keyframes_[k];
     kf.T_map_robot_in_map = graph_.Node(places_[k].node);

@@ -173,6 +173,12 @@ TEST(PipelineTest, RebuildFromCheckpointsAgreesWithRebuildFromScratch) {
   }
   EXPECT_LT(worst, 0.05);
   EXPECT_LT(EvaluateTrajectory(tb, run.truth, {}).ate_rmse_m, 0.05);
+  // Both rebuilt; the checkpoints spared re-inserting the keyframes before the first that moved.
+  ASSERT_GT(a.NumMapRebuilds(), 0);
+  ASSERT_GT(b.NumMapRebuilds(), 0);
+  EXPECT_GE(a.NumKeyframesReinserted(), a.NumMapRebuilds());
+  EXPECT_LT(b.NumKeyframesReinserted() / b.NumMapRebuilds(),
+            a.NumKeyframesReinserted() / a.NumMapRebuilds());
   ShapeSlamParams invalid;
   invalid.loop_closure.rebuild_checkpoint_every = -1;
   EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
