@@ -91,7 +91,8 @@ struct RunOutput {
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
   std::size_t matched = 0, keyframes = 0, fast_tracked = 0;
-  int loop_closures = 0, loop_searches = 0, loop_closures_found = 0, map_rebuilds = 0;
+  int loop_closures = 0, loop_searches = 0, loop_closures_found = 0, map_rebuilds = 0,
+      map_deformations = 0;
   long long keyframes_reinserted = 0;
   double processing_s = 0.0;
 };
@@ -118,6 +119,7 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
   out.loop_searches = slam.NumLoopSearches();
   out.loop_closures_found = slam.NumLoopClosuresFound();
   out.map_rebuilds = slam.NumMapRebuilds();
+  out.map_deformations = slam.NumMapDeformations();
   out.keyframes_reinserted = slam.NumKeyframesReinserted();
   out.processing_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -291,6 +293,7 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("loop_searches").Value(out.loop_searches);
   json.Key("loop_closures_found").Value(out.loop_closures_found);
   json.Key("map_rebuilds").Value(out.map_rebuilds);
+  json.Key("map_deformations").Value(out.map_deformations);
   json.Key("keyframes_reinserted").Value(out.keyframes_reinserted);
   json.Key("odometry").BeginObject().Key("requested").Value(params.use_odometry);
   json.Key("status").Value(ToString(odometry.status));

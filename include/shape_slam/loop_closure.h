@@ -136,6 +136,12 @@ struct LoopClosureParams {
   /// rebuild costs a map update per keyframe.
   double rebuild_min_shift_m = 0.03;
   double rebuild_min_shift_rad = 0.005;
+  /// When no keyframe moved by more than this (metres, radians), the map is not rebuilt but
+  /// deformed: each polyline moves rigidly with the keyframe that last added or merged into it.
+  /// Cheap, and within the small shifts exact enough to track against; the keyframes involved
+  /// are inserted again at the next rebuild or at the end of the log (Finish). 0: always rebuild.
+  double deform_max_shift_m = 0.15;
+  double deform_max_shift_rad = 0.03;
   /// The map as it stood after every this many keyframes is kept (a copy), so that a rebuild
   /// starts from the last such copy before the first keyframe that moved instead of from an
   /// empty map: keyframes before a closed loop hardly move. 0 keeps none (rebuild from scratch).

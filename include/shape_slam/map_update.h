@@ -83,6 +83,7 @@ struct MapUpdateStats {
   int dropped = 0;  ///< map polylines removed by the contradiction rule
   int unsound = 0;  ///< merges rejected because the result strayed from its inputs
   int explained = 0;  ///< perceived polylines the map already held (not added)
+  std::vector<PolylineId> touched;  ///< the map polylines it added or merged into
 };
 
 /// One scan's map update at the final pose: every perceived polyline (map frame) merges into

@@ -226,6 +226,8 @@ class ShapeSlam {
   /// Map rebuilds after a pose-graph optimisation moved keyframes, and the keyframes they
   /// inserted again (the cost of keeping the map consistent with the graph).
   int NumMapRebuilds() const { return num_rebuilds_; }
+  /// Map deformations instead of a rebuild (LoopClosureParams::deform_max_shift_m).
+  int NumMapDeformations() const { return num_deformations_; }
   long long NumKeyframesReinserted() const { return num_reinserted_; }
   /// Whether the log's odometry was used (see OdometryStatus).
   const OdometryReport& Odometry() const { return odometry_; }
@@ -271,7 +273,9 @@ class ShapeSlam {
                    const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
   void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                     const Eigen::Matrix3d& covariance);
-  void OptimizeAndRebuild();
+  void OptimizeAndRebuild(bool at_end);
+  void DeformMap(int first_moved);
+  void TagTouched(const MapUpdateStats& stats, int keyframe);
   void RebuildFrom(int first_moved);
   void CheckpointMap(int keyframes);
 
@@ -282,6 +286,10 @@ class ShapeSlam {
   std::vector<Keyframe> keyframes_;
   std::vector<MapCheckpoint> checkpoints_;  // increasing keyframes
   int num_rebuilds_ = 0;
+  int num_deformations_ = 0;
+  // First keyframe whose part of the map was deformed rather than rebuilt (-1: none): the next
+  // rebuild starts no later than there, and no checkpoint is kept until then.
+  int deformed_from_ = -1;
   long long num_reinserted_ = 0;
   std::vector<LoopKeyframe> places_;  // the keyframes' shapes, node and travel (same order)
   LoopCloser loop_closer_;

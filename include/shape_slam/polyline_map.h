@@ -20,6 +20,9 @@ struct MapPolyline {
   std::vector<double> support;   ///< per vertex: number of observations averaged into it
   int observations = 1;          ///< scans that matched or created this polyline
   int contradictions = 0;        ///< scans whose rays passed through it (see map_update.h)
+  /// The keyframe (ShapeSlam's index) whose scan last added or merged into it; -1: none (a
+  /// loaded map). A small pose-graph correction moves the polyline with that keyframe.
+  int keyframe = -1;
 };
 
 class PolylineMap {
@@ -36,6 +39,8 @@ class PolylineMap {
   void Clear();
 
   bool Contains(PolylineId id) const { return polylines_.count(id) > 0; }
+  /// Sets MapPolyline::keyframe of a polyline in the map (geometry and index untouched).
+  void SetKeyframe(PolylineId id, int keyframe) { polylines_.at(id).keyframe = keyframe; }
   /// The polyline `id`; throws std::out_of_range when absent.
   const MapPolyline& Get(PolylineId id) const;
   /// All ids in increasing order (deterministic iteration).

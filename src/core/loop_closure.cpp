@@ -149,6 +149,8 @@ void LoopClosureParams::Validate() const {
   NonNegative(min_correction_rad, "LoopClosureParams::min_correction_rad");
   NonNegative(rebuild_min_shift_m, "LoopClosureParams::rebuild_min_shift_m");
   NonNegative(rebuild_min_shift_rad, "LoopClosureParams::rebuild_min_shift_rad");
+  NonNegative(deform_max_shift_m, "LoopClosureParams::deform_max_shift_m");
+  NonNegative(deform_max_shift_rad, "LoopClosureParams::deform_max_shift_rad");
   if (rebuild_checkpoint_every < 0) {
     throw std::invalid_argument("LoopClosureParams::rebuild_checkpoint_every must be >= 0");
   }

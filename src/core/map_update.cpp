@@ -472,6 +472,9 @@ MapUpdateStats UpdateMap(PolylineMap& map, const std::vector<Polyline>& perceive
   }
   // An unconfirmed pose could make right polylines look contradicted: count only confirmed views.
   if (pose_trusted) CountContradictions(map, visible, scan, touched, params, stats);
+  for (const PolylineId id : touched) {
+    if (map.Contains(id)) stats.touched.push_back(id);
+  }
   return stats;
 }
 

@@ -260,20 +260,62 @@ void ShapeSlam::AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
   graph_.AddEdge(anchor);
 }
 
-// Optimises the pose graph, then rebuilds the map from the keyframes at their corrected poses
-// when one of them moved by more than rebuild_min_shift_* from where the map holds it. The
-// rebuild starts from the last checkpoint before the first keyframe that moved: keyframes
-// before a closed loop keep their poses, and so does their part of the map.
-void ShapeSlam::OptimizeAndRebuild() {
-  graph_.Optimize(params_.loop_closure.graph);
+// Optimises the pose graph, then brings the map to the keyframes' corrected poses when one of
+// them moved by more than rebuild_min_shift_* from where the map holds it: by a deformation when
+// every shift is small (deform_max_shift_*, not during the last optimisation), else by a rebuild.
+// The rebuild starts from the last checkpoint before the first keyframe that moved (or that a
+// deformation left approximate): keyframes before a closed loop keep their poses, and so does
+// their part of the map.
+void ShapeSlam::OptimizeAndRebuild(bool at_end) {
+  const LoopClosureParams& lc = params_.loop_closure;
+  graph_.Optimize(lc.graph);
+  int first_moved = -1;
+  double max_shift_m = 0.0, max_shift_rad = 0.0;
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
     const Pose2 shift = keyframes_[k].T_map_robot_in_map.Inverse() * graph_.Node(places_[k].node);
-    if (shift.Translation().norm() > params_.loop_closure.rebuild_min_shift_m ||
-        std::abs(shift.theta) > params_.loop_closure.rebuild_min_shift_rad) {
-      RebuildFrom(static_cast<int>(k));
-      return;
+    max_shift_m = std::max(max_shift_m, shift.Translation().norm());
+    max_shift_rad = std::max(max_shift_rad, std::abs(shift.theta));
+    if (first_moved < 0 && (shift.Translation().norm() > lc.rebuild_min_shift_m ||
+                            std::abs(shift.theta) > lc.rebuild_min_shift_rad)) {
+      first_moved = static_cast<int>(k);
     }
   }
+  if (!at_end && first_moved >= 0 && max_shift_m <= lc.deform_max_shift_m &&
+      max_shift_rad <= lc.deform_max_shift_rad) {
+    DeformMap(first_moved);
+    return;
+  }
+  if (deformed_from_ >= 0 && (at_end || first_moved >= 0)) {
+    first_moved = first_moved < 0 ? deformed_from_ : std::min(first_moved, deformed_from_);
+  }
+  if (first_moved >= 0) RebuildFrom(first_moved);
+}
+
+// Moves every polyline last touched by a keyframe from first_moved on rigidly with it, from where
+// the map holds the keyframe to its pose in the graph. A polyline that several keyframes merged
+// into moves with the last one; within deform_max_shift_* they move alike.
+void ShapeSlam::DeformMap(int first_moved) {
+  std::vector<PointTransform> correction;
+  for (std::size_t k = first_moved; k < keyframes_.size(); ++k) {
+    const Pose2 T_map_robot = graph_.Node(places_[k].node);
+    correction.emplace_back(T_map_robot * keyframes_[k].T_map_robot_in_map.Inverse());
+    keyframes_[k].T_map_robot_in_map = T_map_robot;
+  }
+  for (const PolylineId id : map_.Ids()) {
+    const int k = map_.Get(id).keyframe;
+    if (k < first_moved) continue;
+    MapPolyline polyline = map_.Get(id);
+    for (Point2& p : polyline.points) p = correction[k - first_moved](p);
+    map_.Replace(id, std::move(polyline));
+  }
+  // The checkpoints after first_moved hold those keyframes where they were.
+  while (!checkpoints_.empty() && checkpoints_.back().keyframes > first_moved) checkpoints_.pop_back();
+  deformed_from_ = deformed_from_ < 0 ? first_moved : std::min(deformed_from_, first_moved);
+  ++num_deformations_;
+}
+
+void ShapeSlam::TagTouched(const MapUpdateStats& stats, int keyframe) {
+  for (const PolylineId id : stats.touched) map_.SetKeyframe(id, keyframe);
 }
 
 void ShapeSlam::RebuildFrom(int first_moved) {
@@ -285,6 +327,7 @@ void ShapeSlam::RebuildFrom(int first_moved) {
     map_.Restore(checkpoints_.back().map);
     start = checkpoints_.back().keyframes;
   }
+  deformed_from_ = -1;
   const ScanInsertionParams insertion = ToScanInsertionParams(params_);
   ++num_rebuilds_;
   num_reinserted_ += static_cast<long long>(keyframes_.size()) - start;
@@ -292,8 +335,9 @@ void ShapeSlam::RebuildFrom(int first_moved) {
     Keyframe& kf = keyframes_[k];
     kf.T_map_robot_in_map = graph_.Node(places_[k].node);
     const Pose2 T_map_sensor = kf.T_map_robot_in_map * kf.scan.T_robot_sensor;
-    InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor, kf.trusted || map_.Empty(),
-                     insertion);
+    TagTouched(InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor,
+                                kf.trusted || map_.Empty(), insertion),
+               static_cast<int>(k));
     CheckpointMap(static_cast<int>(k) + 1);
   }
 }
@@ -302,7 +346,7 @@ void ShapeSlam::RebuildFrom(int first_moved) {
 // rebuild_checkpoint_every keyframes.
 void ShapeSlam::CheckpointMap(int keyframes) {
   const int every = params_.loop_closure.rebuild_checkpoint_every;
-  if (every <= 0 || keyframes % every != 0) return;
+  if (every <= 0 || keyframes % every != 0 || deformed_from_ >= 0) return;
   if (!checkpoints_.empty() && checkpoints_.back().keyframes >= keyframes) return;
   checkpoints_.push_back({keyframes, map_.TakeSnapshot()});
 }
@@ -310,7 +354,7 @@ void ShapeSlam::CheckpointMap(int keyframes) {
 void ShapeSlam::Finish() {
   const auto& edges = graph_.Edges();
   if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
-    OptimizeAndRebuild();
+    OptimizeAndRebuild(/*at_end=*/true);
     if (!anchors_.empty()) {
       last_T_map_robot_ = KeyframePose(anchors_.back().keyframe) * anchors_.back().T_keyframe_robot;
     }
@@ -394,12 +438,13 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     const bool trusted = loc.trusted || map_.Empty();
     report.map_update =
         UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
+    TagTouched(report.map_update, static_cast<int>(keyframes_.size()));
     report.keyframe = true;
     AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), report.T_map_robot,
                 trusted, loc.covariance);
     CheckpointMap(static_cast<int>(keyframes_.size()));
     if (loop_closer_.Update(places_, graph_)) {
-      OptimizeAndRebuild();
+      OptimizeAndRebuild(/*at_end=*/false);
       report.T_map_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
     }
   }

@@ -162,6 +162,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "min_correction_rad", "... or this (rad)", &p.loop_closure.min_correction_rad},
       {"loop_closure", "rebuild_min_shift_m", "after optimising, rebuild the map only if a keyframe moved more than this (m) ...", &p.loop_closure.rebuild_min_shift_m},
       {"loop_closure", "rebuild_min_shift_rad", "... or this (rad)", &p.loop_closure.rebuild_min_shift_rad},
+      {"loop_closure", "deform_max_shift_m", "when no keyframe moved more than this (m) ...", &p.loop_closure.deform_max_shift_m},
+      {"loop_closure", "deform_max_shift_rad", "... and this (rad), deform the map instead (polylines move with their keyframe; rebuilt at the next rebuild or the end; 0: always rebuild)", &p.loop_closure.deform_max_shift_rad},
       {"loop_closure", "rebuild_checkpoint_every", "keep a copy of the map every this many keyframes; a rebuild starts from the last one before the first keyframe that moved (0: none)", &p.loop_closure.rebuild_checkpoint_every},
       {"loop_closure", "max_correction_rad", "a closure may turn the estimate by at most this (rad) ...", &p.loop_closure.max_correction_rad},
       {"loop_closure", "max_correction_rad_per_m", "... plus this per metre of pose-graph distance (rad/m)", &p.loop_closure.max_correction_rad_per_m},

@@ -187,6 +187,44 @@ TEST(PipelineTest, RebuildFromCheckpointsAgreesWithRebuildFromScratch) {
   EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
 }
 
+TEST(PipelineTest, DeformingTheMapAgreesWithRebuildingIt) {
+  const SimRun run = Simulate(5);
+  ShapeSlamParams rebuild;
+  // Every closure optimises and every shift above 5 mm changes the map: the loop here is
+  // closed well as it goes, its corrections are small.
+  rebuild.loop_closure.min_correction_m = 0.0;
+  rebuild.loop_closure.min_correction_rad = 0.0;
+  rebuild.loop_closure.rebuild_min_shift_m = 0.005;
+  rebuild.loop_closure.rebuild_min_shift_rad = 0.001;
+  ShapeSlamParams deform = rebuild;
+  rebuild.loop_closure.deform_max_shift_m = 0.0;  // always rebuild
+  deform.loop_closure.deform_max_shift_m = 10.0;  // deform whenever it can
+  deform.loop_closure.deform_max_shift_rad = 1.0;
+  ShapeSlam a(rebuild), b(deform);
+  for (const LaserScan& scan : run.scans) a.Process(scan), b.Process(scan);
+  EXPECT_EQ(a.NumMapDeformations(), 0);
+  ASSERT_GT(b.NumMapDeformations(), 0);
+  ASSERT_GT(a.NumMapRebuilds(), 0);
+  const int rebuilds_before_end = b.NumMapRebuilds();
+  b.Finish();
+  a.Finish();
+  // The end of the log rebuilds what the deformations left approximate.
+  EXPECT_EQ(b.NumMapRebuilds(), rebuilds_before_end + 1);
+  EXPECT_LT(b.NumKeyframesReinserted(), a.NumKeyframesReinserted());
+  const std::vector<StampedPose> ta = a.Trajectory(), tb = b.Trajectory();
+  ASSERT_EQ(ta.size(), tb.size());
+  EXPECT_LT(EvaluateTrajectory(ta, run.truth, {}).ate_rmse_m, 0.05);
+  EXPECT_LT(EvaluateTrajectory(tb, run.truth, {}).ate_rmse_m, 0.05);
+  // Every map polyline was last touched by a keyframe of this run.
+  for (const PolylineId id : b.Map().Ids()) {
+    EXPECT_GE(b.Map().Get(id).keyframe, 0);
+    EXPECT_LT(b.Map().Get(id).keyframe, static_cast<int>(b.Keyframes().size()));
+  }
+  ShapeSlamParams invalid;
+  invalid.loop_closure.deform_max_shift_rad = -0.1;
+  EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
+}
+
 TEST(PipelineTest, IsDeterministic) {
   const SimRun run = Simulate(2);
   const Outcome a = Map(run, ShapeSlamParams{});
