@@ -209,20 +209,43 @@ std::vector<PolylineId> CorrespondingMapPolylines(const PolylineMap& map, const 
   return ids;
 }
 
-// Largest distance from points sampled along `a` (every spacing_m) to the nearer of `b` and `c`.
-double FarthestFrom(const Polyline& a, const Polyline& b, const Polyline& c, double spacing_m) {
-  double worst = 0.0;
+// Whether a point lies within `tolerance` of a polyline (not empty). The segment that was near
+// the previous query is tried first (`hint`): consecutive samples along a polyline are near the
+// same segment, so a typical query costs one segment instead of a scan over all of them.
+bool NearPolyline(const Point2& p, const Polyline& polyline, double tolerance2, std::size_t& hint) {
+  if (polyline.size() == 1) return (p - polyline.front()).squaredNorm() <= tolerance2;
+  const auto near = [&](std::size_t i) {
+    const double t = SegmentParameter(p, polyline[i], polyline[i + 1]);
+    return (p - (polyline[i] + t * (polyline[i + 1] - polyline[i]))).squaredNorm() <= tolerance2;
+  };
+  if (hint + 1 < polyline.size() && near(hint)) return true;
+  for (std::size_t i = 0; i + 1 < polyline.size(); ++i) {
+    if (near(i)) {
+      hint = i;
+      return true;
+    }
+  }
+  return false;
+}
+
+// Whether every point sampled along `a` (every spacing_m) lies within `tolerance` of `b` or of
+// `c` (which may be empty).
+bool AllWithin(const Polyline& a, const Polyline& b, const Polyline& c, double spacing_m,
+               double tolerance) {
+  const double tolerance2 = tolerance * tolerance;
+  std::size_t hint_b = 0, hint_c = 0;
   for (std::size_t i = 0; i + 1 < a.size(); ++i) {
     const Point2 d = a[i + 1] - a[i];
     const int n = std::max(1, static_cast<int>(std::ceil(d.norm() / spacing_m)));
     for (int k = 0; k <= n; ++k) {
       const Point2 p = a[i] + d * (static_cast<double>(k) / n);
-      double d2 = ProjectOntoPolyline(p, b).squared_distance;
-      if (!c.empty()) d2 = std::min(d2, ProjectOntoPolyline(p, c).squared_distance);
-      worst = std::max(worst, d2);
+      if (!NearPolyline(p, b, tolerance2, hint_b) &&
+          (c.empty() || !NearPolyline(p, c, tolerance2, hint_c))) {
+        return false;
+      }
     }
   }
-  return std::sqrt(worst);
+  return true;
 }
 
 // A merge is sound when the result stays close to its inputs along its whole length and still
@@ -232,8 +255,8 @@ bool SoundMerge(const Polyline& merged, const Polyline& model, const Polyline& p
                 const MapUpdateParams& params) {
   const double tolerance = 2.0 * params.merge_max_misfit_m;
   const double spacing = params.merge_check_spacing_m;
-  return merged.size() >= 2 && FarthestFrom(merged, model, perceived, spacing) <= tolerance &&
-         FarthestFrom(model, merged, {}, spacing) <= tolerance;
+  return merged.size() >= 2 && AllWithin(merged, model, perceived, spacing, tolerance) &&
+         AllWithin(model, merged, {}, spacing, tolerance);
 }
 
 // Whether more than `fraction` of a perceived polyline lies within `clearance_m` of the map.
