@@ -1,12 +1,11 @@
 #include "shape_slam/alignment_refinement.h"
 
 #include <ceres/loss_function.h>
-#include <ceres/tiny_solver.h>
+#include <ceres/problem.h>
+#include <ceres/solver.h>
 
 #include <Eigen/Cholesky>
-#include <Eigen/Core>
 #include <Eigen/Eigenvalues>
-#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <functional>
@@ -16,7 +15,6 @@
 #include <string>
 #include <tuple>
 #include <utility>
-#include <vector>
 
 #include "shape_slam/internal/model_segments.h"
 #include "shape_slam/internal/point_to_segment_cost.h"
@@ -46,7 +44,7 @@ struct ShiftedPrior {
   Eigen::Matrix3d sqrt_information;
 };
 
-// What one Ceres (TinySolver) solve produced.
+// What one Ceres solve produced.
 struct SolveOutcome {
   Pose2 T_map_scan;
   bool converged = false;
@@ -95,182 +93,98 @@ std::unique_ptr<ceres::LossFunction> MakeLoss(const RefinementParams& params) {
   return std::make_unique<ceres::CauchyLoss>(scale);
 }
 
-// Ceres's correction of a residual block for its robust loss (internal/corrector.cc), so that
-// the TinySolver's Gauss-Newton model is the one ceres::Solve builds: with s = |r|^2 and
-// rho = (rho(s), rho'(s), rho''(s)),
-//   r~ = sqrt(rho') / (1 - alpha) r,   J~ = sqrt(rho') (I - alpha r r^T / s) J,
-// alpha the smaller root of alpha^2 / 2 - alpha - s rho'' / rho' = 0 where rho'' > 0, else 0
-// (always 0 for Huber and Cauchy): J~^T r~ is the gradient of rho / 2, J~^T J~ its Hessian.
-class LossCorrection {
- public:
-  LossCorrection(double sq_norm, const double rho[3]) : sqrt_rho1_(std::sqrt(rho[1])) {
-    if (sq_norm == 0.0 || rho[2] <= 0.0) {
-      residual_scaling_ = sqrt_rho1_;
-      return;
-    }
-    const double alpha = 1.0 - std::sqrt(1.0 + 2.0 * sq_norm * rho[2] / rho[1]);
-    residual_scaling_ = sqrt_rho1_ / (1.0 - alpha);
-    alpha_sq_norm_ = alpha / sq_norm;
-  }
-
-  // J (2 x 3) from the uncorrected r, before CorrectResidual.
-  void CorrectJacobian(const Eigen::Vector2d& r, Eigen::Matrix<double, 2, 3>& J) const {
-    if (alpha_sq_norm_ != 0.0) J -= alpha_sq_norm_ * r * (r.transpose() * J);
-    J *= sqrt_rho1_;
-  }
-  void CorrectResidual(Eigen::Vector2d& r) const { r *= residual_scaling_; }
-
- private:
-  double sqrt_rho1_;
-  double residual_scaling_ = 0.0;
-  double alpha_sq_norm_ = 0.0;
-};
-
-// The whole problem of one solve as the single cost function of a ceres::TinySolver: with only
-// 3 parameters and a few hundred samples, ceres::Solve's per-residual-block machinery cost more
-// than the arithmetic. Residuals: 2 per sample (loss-corrected as above), 3 of the prior, and a
-// last one, constant in the linear model, that carries the rest of the robust cost,
-// sqrt(sum(rho - |r~|^2)): the squared norm of the vector is then twice Ceres's cost
-// sum(rho) / 2 + |r_prior|^2 / 2, on which the solver accepts or rejects its steps as
-// ceres::Solve does (rho >= |r~|^2 for losses that are concave in s, as Huber and Cauchy are).
-class RefinementFunction {
- public:
-  using Scalar = double;
-  enum { NUM_RESIDUALS = Eigen::Dynamic, NUM_PARAMETERS = 3 };
-
-  RefinementFunction(const std::vector<Association>& associations,
-                     const std::vector<ModelSegment>& segments, const Point2& origin,
-                     const std::optional<ShiftedPrior>& prior, const RefinementParams& params)
-      : loss_(MakeLoss(params)) {
-    weights_.reserve(associations.size());
-    for (const Association& a : associations) {
-      const ModelSegment& s = segments[static_cast<std::size_t>(a.segment)];
-      costs_.emplace_back(a.sample_scan, s.a - origin, s.b() - origin, params.point_sigma_m);
-      weights_.push_back(a.weight);
-    }
-    if (prior) prior_.reset(internal::PosePriorCost::Create(prior->mean, prior->sqrt_information));
-  }
-
-  int NumResiduals() const { return 2 * NumSamples() + (prior_ ? 3 : 0) + 1; }
-
-  // |f|^2 at `pose`: twice Ceres's cost.
-  double SquaredNorm(const double* pose) const {
-    Eigen::VectorXd f(NumResiduals());
-    (*this)(pose, f.data(), nullptr);
-    return f.squaredNorm();
-  }
-
-  // Residuals and (when `jacobian` is not null) their column-major Jacobian at `pose`.
-  bool operator()(const double* pose, double* residuals, double* jacobian) const {
-    const int rows = NumResiduals();
-    Eigen::Map<Eigen::VectorXd> f(residuals, rows);
-    JacobianMap J(jacobian, rows, 3);  // not touched when null
-    double rest = 0.0;                 // sum(rho - |r~|^2)
-    for (int i = 0; i < NumSamples(); ++i) {
-      Sample sample = EvaluateSample(i, pose);
-      const LossCorrection correction(sample.r.squaredNorm(), sample.rho);
-      if (jacobian) {
-        correction.CorrectJacobian(sample.r, sample.J);
-        J.middleRows<2>(2 * i) = sample.J;
-      }
-      correction.CorrectResidual(sample.r);
-      f.segment<2>(2 * i) = sample.r;
-      rest += sample.rho[0] - sample.r.squaredNorm();
-    }
-    if (prior_) EvaluatePrior(pose, residuals + 2 * NumSamples(), jacobian ? &J : nullptr);
-    f[rows - 1] = std::sqrt(std::max(rest, 0.0));
-    if (jacobian) J.row(rows - 1).setZero();
-    return true;
-  }
-
-  // Gauss-Newton information J^T W J of the samples at `pose` (W = rho'(s) of the robust loss,
-  // which includes the pair weight) and their RMS distance to the segments, metres.
-  std::pair<Eigen::Matrix3d, double> SampleInformation(const double* pose, double sigma_m) const {
-    Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
-    double sum_d2 = 0.0;
-    for (int i = 0; i < NumSamples(); ++i) {
-      const Sample sample = EvaluateSample(i, pose);
-      information += sample.rho[1] * sample.J.transpose() * sample.J;
-      sum_d2 += sample.r.squaredNorm() * sigma_m * sigma_m;
-    }
-    return {information, std::sqrt(sum_d2 / static_cast<double>(NumSamples()))};
-  }
-
- private:
-  // One sample's residual, Jacobian and loss (scaled by the pair's weight, as ceres::ScaledLoss).
-  struct Sample {
-    Eigen::Vector2d r;
-    Eigen::Matrix<double, 2, 3> J;
-    double rho[3];
-  };
-
-  using JacobianMap = Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, 3>>;
-
-  int NumSamples() const { return static_cast<int>(costs_.size()); }
-
-  Sample EvaluateSample(int i, const double* pose) const {
-    Sample sample;
-    Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J;
-    double* jacobians[] = {J.data()};
-    costs_[static_cast<std::size_t>(i)].Evaluate(&pose, sample.r.data(), jacobians);
-    sample.J = J;
-    loss_->Evaluate(sample.r.squaredNorm(), sample.rho);
-    for (double& rho_k : sample.rho) rho_k *= weights_[static_cast<std::size_t>(i)];
-    return sample;
-  }
-
-  void EvaluatePrior(const double* pose, double* residuals, JacobianMap* J) const {
-    Eigen::Matrix<double, 3, 3, Eigen::RowMajor> J_prior;
-    double* jacobians[] = {J_prior.data()};
-    prior_->Evaluate(&pose, residuals, J ? jacobians : nullptr);
-    if (J) J->middleRows<3>(2 * NumSamples()) = J_prior;
-  }
-
-  std::deque<internal::PointToSegmentCost> costs_;  // not copyable: no vector
-  std::vector<double> weights_;
-  std::unique_ptr<ceres::LossFunction> loss_;
-  std::unique_ptr<ceres::CostFunction> prior_;
-};
-
-using RefinementSolver = ceres::TinySolver<RefinementFunction>;
-
-// Today's ceres::Solve tolerances. TinySolver counts its first evaluation as an iteration, hence
-// the + 1 for the same number of steps. Its function tolerance is absolute, on the change of
-// |f|^2 = 2 cost, where Ceres's is relative to the cost: hence 1e-9 times |f|^2 at the start
-// (Ceres takes the current cost, a little lower). An absolute 1e-9 took more iterations than
-// ceres::Solve and ran out of them on many slowly converging problems that Ceres had solved.
-RefinementSolver::Options SolverOptions(const RefinementParams& params, double initial_norm2) {
-  RefinementSolver::Options options;
-  options.max_num_iterations = params.max_solver_iterations + 1;
-  options.function_tolerance = 1e-9 * initial_norm2;
+ceres::Solver::Options SolverOptions(const RefinementParams& params) {
+  ceres::Solver::Options options;
+  options.linear_solver_type = ceres::DENSE_NORMAL_CHOLESKY;
+  options.max_num_iterations = params.max_solver_iterations;
+  options.num_threads = 1;
+  options.logging_type = ceres::SILENT;
+  options.minimizer_progress_to_stdout = false;
+  options.function_tolerance = 1e-9;
   options.gradient_tolerance = 1e-12;
   options.parameter_tolerance = 1e-9;
   return options;
 }
 
-// Only running out of iterations is ceres::Solve's NO_CONVERGENCE; the other stops are its
-// CONVERGENCE (a cost below machine epsilon is an exact fit).
-bool Converged(RefinementSolver::Status status) {
-  return status != RefinementSolver::HIT_MAX_ITERATIONS;
+// The losses of the samples: the base loss, scaled by the pair's weight when it is not 1 (one
+// ScaledLoss per distinct weight; pairs are few).
+class LossBank {
+ public:
+  explicit LossBank(const RefinementParams& params) : base_(MakeLoss(params)) {}
+  ceres::LossFunction* For(double weight) {
+    if (weight == 1.0) return base_.get();
+    for (const auto& [w, loss] : scaled_) {
+      if (w == weight) return loss.get();
+    }
+    scaled_.emplace_back(weight, std::make_unique<ceres::ScaledLoss>(base_.get(), weight,
+                                                                     ceres::DO_NOT_TAKE_OWNERSHIP));
+    return scaled_.back().second.get();
+  }
+
+ private:
+  std::unique_ptr<ceres::LossFunction> base_;
+  std::vector<std::pair<double, std::unique_ptr<ceres::LossFunction>>> scaled_;
+};
+
+// Gauss-Newton information J^T W J of the samples at `pose` (W = rho'(s) of the robust loss,
+// which includes the pair weight) and their RMS distance to the segments, metres.
+std::pair<Eigen::Matrix3d, double> SampleInformation(
+    const std::vector<ceres::CostFunction*>& costs, const std::vector<ceres::LossFunction*>& losses,
+    const double* pose, double sigma_m) {
+  Eigen::Matrix3d information = Eigen::Matrix3d::Zero();
+  double sum_d2 = 0.0;
+  Eigen::Matrix<double, 2, 3, Eigen::RowMajor> J;
+  double* jacobians[] = {J.data()};
+  for (std::size_t i = 0; i < costs.size(); ++i) {
+    Eigen::Vector2d r;
+    costs[i]->Evaluate(&pose, r.data(), jacobians);
+    double rho[3];
+    losses[i]->Evaluate(r.squaredNorm(), rho);
+    information += rho[1] * J.transpose() * J;
+    sum_d2 += r.squaredNorm() * sigma_m * sigma_m;
+  }
+  return {information, std::sqrt(sum_d2 / static_cast<double>(costs.size()))};
 }
 
-// One Ceres (TinySolver) solve of the associated samples (and the prior) starting at
-// T_map_scan. The pose parameters are relative to `origin` so that the solver's relative
-// tolerances and the residuals stay accurate far from the map origin.
+// One Ceres solve of the associated samples (and the prior) starting at T_map_scan. The pose
+// parameters are relative to `origin` so that the solver's relative tolerances and the
+// residuals stay accurate far from the map origin.
 SolveOutcome Solve(const std::vector<Association>& associations,
                    const std::vector<ModelSegment>& segments, const Pose2& T_map_scan,
                    const Point2& origin, const std::optional<ShiftedPrior>& prior,
                    const RefinementParams& params) {
-  const RefinementFunction function(associations, segments, origin, prior, params);
-  Eigen::Vector3d pose(T_map_scan.x - origin.x(), T_map_scan.y - origin.y(), T_map_scan.theta);
-  RefinementSolver solver;
-  solver.options = SolverOptions(params, function.SquaredNorm(pose.data()));
-  const RefinementSolver::Summary& summary = solver.Solve(function, &pose);
+  double pose[3] = {T_map_scan.x - origin.x(), T_map_scan.y - origin.y(), T_map_scan.theta};
+  LossBank loss_bank(params);
+  ceres::Problem::Options problem_options;
+  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.cost_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
+  problem_options.disable_all_safety_checks = true;
+  // The costs outlive the problem, which does not own them.
+  std::deque<internal::PointToSegmentCost> sample_costs;  // stable addresses, few allocations
+  std::unique_ptr<ceres::CostFunction> prior_cost;
+  ceres::Problem problem(problem_options);
+  std::vector<ceres::CostFunction*> costs;
+  std::vector<ceres::LossFunction*> losses;
+  costs.reserve(associations.size());
+  losses.reserve(associations.size());
+  for (const Association& a : associations) {
+    const ModelSegment& s = segments[static_cast<std::size_t>(a.segment)];
+    costs.push_back(&sample_costs.emplace_back(a.sample_scan, s.a - origin, s.b() - origin,
+                                               params.point_sigma_m));
+    losses.push_back(loss_bank.For(a.weight));
+    problem.AddResidualBlock(costs.back(), losses.back(), pose);
+  }
+  if (prior) {
+    prior_cost.reset(internal::PosePriorCost::Create(prior->mean, prior->sqrt_information));
+    problem.AddResidualBlock(prior_cost.get(), nullptr, pose);
+  }
+  ceres::Solver::Summary summary;
+  ceres::Solve(SolverOptions(params), &problem, &summary);
   SolveOutcome outcome;
   outcome.T_map_scan = {pose[0] + origin.x(), pose[1] + origin.y(), NormalizeAngle(pose[2])};
-  outcome.converged = Converged(summary.status);
+  outcome.converged = summary.termination_type == ceres::CONVERGENCE;
   std::tie(outcome.information, outcome.rms_error_m) =
-      function.SampleInformation(pose.data(), params.point_sigma_m);
+      SampleInformation(costs, losses, pose, params.point_sigma_m);
   if (prior) outcome.information += prior->sqrt_information.transpose() * prior->sqrt_information;
   return outcome;
 }

@@ -1,10 +1,6 @@
 #include "shape_slam/alignment_refinement.h"
 
 #include <ceres/cost_function.h>
-#include <ceres/covariance.h>
-#include <ceres/loss_function.h>
-#include <ceres/problem.h>
-#include <ceres/solver.h>
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -16,13 +12,10 @@
 #include <random>
 #include <stdexcept>
 #include <string>
-#include <utility>
-#include <vector>
 
 #include "core/alignment_scenes.h"
 #include "core/pose_matchers.h"
 #include "shape_slam/alignment.h"
-#include "shape_slam/internal/model_segments.h"
 #include "shape_slam/internal/point_to_segment_cost.h"
 #include "shape_slam/internal/pose_prior_cost.h"
 
@@ -323,156 +316,6 @@ TEST(RefineAlignmentTest, PairWeights) {
   EXPECT_GT(light, 0.0);
   EXPECT_GT(heavy, 2.0 * light);
   EXPECT_GT(heavy, 0.005);
-}
-
-// ---------------------------------------------------------------------------------------------
-// The solve against ceres::Solve
-
-// One residual block of the reference problem: a sample and its segment, and the pair's weight.
-struct ReferenceBlock {
-  Point2 sample_scan;
-  internal::ModelSegment segment;
-  double weight = 1.0;
-};
-
-// ceres::Covariance of the pose block, which applies the loss as the refinement's J^T W J does.
-Eigen::Matrix3d ReferenceCovariance(ceres::Problem& problem, const double* pose) {
-  ceres::Covariance::Options options;
-  options.algorithm_type = ceres::DENSE_SVD;
-  ceres::Covariance covariance(options);
-  const std::vector<const double*> blocks = {pose};
-  EXPECT_TRUE(covariance.Compute(blocks, &problem));
-  Eigen::Matrix<double, 3, 3, Eigen::RowMajor> C;
-  covariance.GetCovarianceBlock(pose, pose, C.data());
-  return C;
-}
-
-// A plain ceres::Problem of the same residuals and losses (one block per sample, ScaledLoss for
-// the pair weights; a diagonal prior covariance) solved to tight tolerances from `init`.
-std::pair<Pose2, Eigen::Matrix3d> ReferenceSolve(const std::vector<ReferenceBlock>& blocks,
-                                                 const Pose2& init,
-                                                 const std::optional<PosePrior>& prior,
-                                                 const RefinementParams& params) {
-  const double scale = params.loss_scale_m / params.point_sigma_m;
-  std::unique_ptr<ceres::LossFunction> loss;
-  if (params.loss == RobustLoss::kHuber) {
-    loss = std::make_unique<ceres::HuberLoss>(scale);
-  } else {
-    loss = std::make_unique<ceres::CauchyLoss>(scale);
-  }
-  std::vector<std::unique_ptr<ceres::LossFunction>> scaled_losses;
-  ceres::Problem::Options problem_options;
-  problem_options.loss_function_ownership = ceres::DO_NOT_TAKE_OWNERSHIP;
-  ceres::Problem problem(problem_options);
-  double pose[3] = {init.x, init.y, init.theta};
-  for (const ReferenceBlock& block : blocks) {
-    scaled_losses.push_back(std::make_unique<ceres::ScaledLoss>(loss.get(), block.weight,
-                                                                ceres::DO_NOT_TAKE_OWNERSHIP));
-    problem.AddResidualBlock(
-        internal::PointToSegmentCost::Create(block.sample_scan, block.segment.a,
-                                             block.segment.b(), params.point_sigma_m),
-        scaled_losses.back().get(), pose);
-  }
-  if (prior) {
-    const Eigen::Matrix3d sqrt_information =
-        prior->covariance.diagonal().cwiseSqrt().cwiseInverse().asDiagonal();
-    problem.AddResidualBlock(internal::PosePriorCost::Create(prior->T_map_scan, sqrt_information),
-                             nullptr, pose);
-  }
-  ceres::Solver::Options options;
-  options.linear_solver_type = ceres::DENSE_QR;
-  options.max_num_iterations = 200;
-  options.function_tolerance = options.gradient_tolerance = options.parameter_tolerance = 1e-15;
-  options.logging_type = ceres::SILENT;
-  ceres::Solver::Summary summary;
-  ceres::Solve(options, &problem, &summary);
-  EXPECT_TRUE(summary.IsSolutionUsable()) << summary.BriefReport();
-  return {Pose2(pose[0], pose[1], pose[2]), ReferenceCovariance(problem, pose)};
-}
-
-// The refinement's pose within 1e-6 m / 1e-6 rad of the reference's, its covariance within 1e-6
-// (relative, Frobenius norm), over the same residuals.
-void ExpectSameSolve(const RefinementResult& result, const std::vector<ReferenceBlock>& blocks,
-                     const std::pair<Pose2, Eigen::Matrix3d>& reference) {
-  EXPECT_TRUE(result.converged);
-  EXPECT_EQ(result.num_residuals, static_cast<int>(blocks.size()));
-  EXPECT_THAT(result.T_map_scan, IsNearly(reference.first, 1e-6, 1e-6));
-  EXPECT_LE((result.covariance - reference.second).norm(), 1e-6 * reference.second.norm());
-}
-
-// With one outer iteration the refinement is one solve of the associations at the start, which
-// the reference rebuilds as the unrestricted refinement does (nearest segment, ends rejected).
-std::vector<ReferenceBlock> AssociateAtStart(const std::vector<Point2>& samples,
-                                             const std::vector<Polyline>& scene,
-                                             const Pose2& init, const RefinementParams& params) {
-  const std::vector<internal::ModelSegment> segments = internal::MakeModelSegments(scene);
-  const internal::SegmentGrid grid(segments, params.max_correspondence_distance_m);
-  const PointTransform T_map_scan(init);
-  std::vector<ReferenceBlock> blocks;
-  for (const Point2& p : samples) {
-    const internal::SegmentMatch m = grid.Nearest(T_map_scan(p));
-    if (m.segment >= 0 && !m.beyond_end)
-      blocks.push_back({p, segments[static_cast<std::size_t>(m.segment)], 1.0});
-  }
-  return blocks;
-}
-
-// Three scenes with 20 % of the samples displaced by 0.1-0.25 m along x (inside the gate, so
-// that the loss down-weights them), both losses, with and without a prior: the TinySolver solve
-// lands where ceres::Solve does, with the same covariance.
-TEST(RefineAlignmentTest, SolveMatchesCeresProblem) {
-  std::mt19937 prng(7);
-  std::uniform_real_distribution<double> unit(0.0, 1.0);
-  const PosePrior prior{Pose2(kTruth.x + 0.02, kTruth.y - 0.01, kTruth.theta + 0.5 * kDeg),
-                        Eigen::Vector3d(4e-4, 1e-4, 1e-4).asDiagonal()};
-  int compared = 0;
-  for (const std::vector<Polyline>& scene :
-       {test::LCornerScene(), test::RoomWithPillarScene(), test::CorridorWithDoorsScene()}) {
-    std::vector<Point2> samples =
-        AllSamples(test::MakePairs(test::Perceive(scene, kTruth, 0.01, prng), scene));
-    for (Point2& p : samples) {
-      if (unit(prng) < 0.2) p += (0.1 + 0.15 * unit(prng)) * Point2(1.0, 0.0);
-    }
-    const Pose2 init = test::Perturb(kTruth, 0.03, 1.0 * kDeg, prng);
-    for (const RobustLoss loss : {RobustLoss::kCauchy, RobustLoss::kHuber}) {
-      RefinementParams params;
-      params.loss = loss;
-      params.outer_iterations = 1;
-      const std::vector<ReferenceBlock> blocks = AssociateAtStart(samples, scene, init, params);
-      for (const std::optional<PosePrior>& maybe_prior : {std::optional<PosePrior>(), {prior}}) {
-        ExpectSameSolve(RefineAlignment(samples, scene, init, maybe_prior, params), blocks,
-                        ReferenceSolve(blocks, init, maybe_prior, params));
-        ++compared;
-      }
-    }
-  }
-  EXPECT_EQ(compared, 12);
-}
-
-// The restricted variant with pair weights 0.5 and 3: the weights scale the loss as
-// ceres::ScaledLoss does.
-TEST(RefineAlignmentTest, WeightedSolveMatchesCeresProblem) {
-  std::mt19937 prng(11);
-  const std::vector<Polyline> scene = test::RoomWithPillarScene();
-  std::vector<ShapePair> pairs = test::MakePairs(test::Perceive(scene, kTruth, 0.01, prng), scene);
-  for (std::size_t i = 0; i < pairs.size(); ++i) pairs[i].weight = i % 2 == 0 ? 0.5 : 3.0;
-  pairs[1].model = {Transform(Pose2(0.12, 0.0, 0.0), pairs[1].model[0])};  // a wrong pair
-  const Pose2 init = test::Perturb(kTruth, 0.03, 1.0 * kDeg, prng);
-  RefinementParams params;
-  params.outer_iterations = 1;
-  const internal::RestrictedProblem restricted =
-      internal::MakeRestrictedProblem(pairs, params.sample_spacing_m);
-  const double gate2 = std::pow(params.max_correspondence_distance_m, 2);
-  const PointTransform T_map_scan(init);
-  std::vector<ReferenceBlock> blocks;
-  for (const internal::RestrictedSample& s : restricted.samples) {
-    const internal::SegmentMatch m = internal::NearestSegment(
-        T_map_scan(s.point), restricted.segments, s.segments_begin, s.segments_end, gate2);
-    if (m.segment < 0 || m.beyond_end) continue;
-    blocks.push_back({s.point, restricted.segments[static_cast<std::size_t>(m.segment)], s.weight});
-  }
-  ExpectSameSolve(RefineAlignment(pairs, init, std::nullopt, params), blocks,
-                  ReferenceSolve(blocks, init, std::nullopt, params));
 }
 
 // ---------------------------------------------------------------------------------------------
