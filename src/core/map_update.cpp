@@ -215,8 +215,7 @@ std::vector<PolylineId> CorrespondingMapPolylines(const PolylineMap& map, const 
 bool NearPolyline(const Point2& p, const Polyline& polyline, double tolerance2, std::size_t& hint) {
   if (polyline.size() == 1) return (p - polyline.front()).squaredNorm() <= tolerance2;
   const auto near = [&](std::size_t i) {
-    const double t = SegmentParameter(p, polyline[i], polyline[i + 1]);
-    return (p - (polyline[i] + t * (polyline[i + 1] - polyline[i]))).squaredNorm() <= tolerance2;
+    return SquaredDistanceToSegment(p, polyline[i], polyline[i + 1]) <= tolerance2;
   };
   if (hint + 1 < polyline.size() && near(hint)) return true;
   for (std::size_t i = 0; i + 1 < polyline.size(); ++i) {

@@ -302,10 +302,9 @@ void ShapeSlam::DeformMap(int first_moved) {
     keyframes_[k].T_map_robot_in_map = T_map_robot;
   }
   for (const PolylineId id : map_.Ids()) {
-    const int k = map_.Get(id).keyframe;
-    if (k < first_moved) continue;
+    if (map_.Get(id).keyframe < first_moved) continue;
     MapPolyline polyline = map_.Get(id);
-    for (Point2& p : polyline.points) p = correction[k - first_moved](p);
+    for (Point2& p : polyline.points) p = correction[polyline.keyframe - first_moved](p);
     map_.Replace(id, std::move(polyline));
   }
   // The checkpoints after first_moved hold those keyframes where they were.
