@@ -69,6 +69,7 @@ class CandidateSelector {
   /// Prepares the model polylines (model frame). Throws std::invalid_argument on invalid params.
   CandidateSelector(const std::vector<Polyline>& model, const CandidateSelectionParams& params);
   ~CandidateSelector();
+  CandidateSelector(CandidateSelector&&) noexcept;
 
   /// Fraction of the samples (scan frame) within inlier_distance_m of the model at a pose.
   double Fit(const std::vector<Point2>& samples_scan, const Pose2& T_model_scan) const;

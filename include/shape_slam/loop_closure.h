@@ -20,6 +20,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <memory>
 #include <optional>
 #include <vector>
 
@@ -104,6 +105,12 @@ struct LoopClosureParams {
   /// accepts (min_inlier_ratio of the scan within 10 cm) scores about 0.5 on the window grid;
   /// this keeps half of that as margin.
   double window_min_fit = 0.25;
+  /// A candidate pose of the full search that fits the place (fraction of the scan within
+  /// inlier_distance_m after the quick ICP) less than this is not refined: the verification
+  /// needs min_inlier_ratio at the refined pose, and the refinement moves a candidate only by
+  /// centimetres from where the quick ICP left it. On the development logs no candidate that
+  /// the verification accepted fitted less than 0.52 before refinement.
+  double refine_min_fit = 0.45;
   int confirm_within_keyframes = 10;
   /// Two closures are consistent when the cycle they form through the graph (old keyframe ->
   /// loop -> new keyframe -> graph -> other new keyframe -> loop -> other old keyframe -> graph
@@ -174,6 +181,8 @@ struct LoopClosure {
   double graph_distance_m = 0.0;  ///< along the graph between the two keyframes, when found
 };
 
+struct RankedCandidate;  // candidate_selection.h
+
 class LoopCloser {
  public:
   /// `match`: the shape matching, selection and refinement settings (the mapper's own,
@@ -213,6 +222,16 @@ class LoopCloser {
   std::optional<LoopClosure> MatchAt(const std::vector<LoopKeyframe>& keyframes,
                                      const PoseGraph& graph, int old, double graph_distance) const;
   struct Sides;  // both sides of a candidate match (loop_closure.cpp)
+  /// Both sides of a match of the last keyframe against the place around `old`; null when
+  /// either has nothing to match.
+  std::unique_ptr<Sides> MakeSides(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
+                                   int old, double graph_distance) const;
+  /// The quick check at the graph's estimate (quick_min_fit) and the full search (window search,
+  /// shape matching, selection); each returns the verified closure or nullopt.
+  std::optional<LoopClosure> QuickMatch(const Sides& sides, const PoseGraph& graph) const;
+  std::optional<LoopClosure> FullMatch(const Sides& sides, const PoseGraph& graph) const;
+  /// The refinement of one candidate against the place; nullopt unless it converged.
+  std::optional<RefinementResult> Refine(const Sides& sides, const RankedCandidate& candidate) const;
   /// The closure a refined match implies, if it passes the verification (both sides explain
   /// each other, every direction constrained, correction within the uncertainty).
   std::optional<LoopClosure> Verify(const Sides& sides, const RefinementResult& refined,

@@ -73,6 +73,7 @@ CandidateSelector::CandidateSelector(const std::vector<Polyline>& model,
 }
 
 CandidateSelector::~CandidateSelector() = default;
+CandidateSelector::CandidateSelector(CandidateSelector&&) noexcept = default;
 
 double CandidateSelector::Fit(const std::vector<Point2>& samples_scan,
                               const Pose2& T_model_scan) const {

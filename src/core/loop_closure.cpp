@@ -5,6 +5,7 @@
 #include <cmath>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <queue>
 #include <stdexcept>
 #include <string>
@@ -136,6 +137,7 @@ void LoopClosureParams::Validate() const {
   Fraction(strong_inlier_ratio, "LoopClosureParams::strong_inlier_ratio");
   NonNegative(quick_min_fit, "LoopClosureParams::quick_min_fit");
   Fraction(window_min_fit, "LoopClosureParams::window_min_fit");
+  Fraction(refine_min_fit, "LoopClosureParams::refine_min_fit");
   Positive(search_radius_m, "LoopClosureParams::search_radius_m");
   NonNegative(search_radius_per_m, "LoopClosureParams::search_radius_per_m");
   if (!(max_search_radius_m >= search_radius_m) || !std::isfinite(max_search_radius_m)) {
@@ -306,10 +308,52 @@ struct LoopCloser::Sides {
   const LoopKeyframe& then;
   int old = 0, current = 0;
   double graph_distance = 0.0;
+  Place place;
+  Pose2 estimate;                               // the graph's pose of the scan in the place
   std::vector<Point2> samples, place_samples;  // scan and place, sampled for alignment
   CandidateSelector selector;                   // fit of the scan to the place
   internal::SegmentGrid scan_grid;              // fit of the place to the scan
 };
+
+std::unique_ptr<LoopCloser::Sides> LoopCloser::MakeSides(const std::vector<LoopKeyframe>& keyframes,
+                                                         const PoseGraph& graph, int old,
+                                                         double graph_distance) const {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  const LoopKeyframe& now = keyframes[current];
+  const LoopKeyframe& then = keyframes[old];
+  if (now.shapes.coarse.empty() || then.shapes.coarse.empty()) return nullptr;
+  Place place = OldPlace(keyframes, graph, old, params_);
+  const double spacing = match_.matcher.alignment.sample_spacing_m;
+  std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
+  std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
+  if (samples.empty() || place_samples.empty()) return nullptr;
+  const Pose2 estimate = SensorPose(keyframes, graph, old).Inverse() * SensorPose(keyframes, graph, current);
+  CandidateSelectionParams selection = match_.selection;
+  selection.capture_distance_m = match_.coarse_gate_m;
+  selection.inlier_distance_m = match_.matcher.inlier_distance_m;
+  CandidateSelector selector(place.fine, selection);
+  return std::unique_ptr<Sides>(new Sides{now,
+                                          then,
+                                          old,
+                                          current,
+                                          graph_distance,
+                                          std::move(place),
+                                          estimate,
+                                          std::move(samples),
+                                          std::move(place_samples),
+                                          std::move(selector),
+                                          internal::SegmentGrid(internal::MakeModelSegments(now.shapes.fine),
+                                                                match_.matcher.inlier_distance_m)});
+}
+
+std::optional<RefinementResult> LoopCloser::Refine(const Sides& sides,
+                                                   const RankedCandidate& candidate) const {
+  RefinementResult refined = internal::RefineAgainstMap(sides.samples, sides.place.fine,
+                                                        candidate.T_model_scan, std::nullopt,
+                                                        match_.refinement, match_.coarse_gate_m);
+  if (!refined.converged) return std::nullopt;
+  return refined;
+}
 
 std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides, const RefinementResult& refined,
                                               const PoseGraph& graph) const {
@@ -346,66 +390,35 @@ std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides, const Refineme
   return loop;
 }
 
-std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& keyframes,
-                                               const PoseGraph& graph, int old,
-                                               double graph_distance) const {
-  const int current = static_cast<int>(keyframes.size()) - 1;
-  const LoopKeyframe& now = keyframes[current];
-  const LoopKeyframe& then = keyframes[old];
-  if (now.shapes.coarse.empty() || then.shapes.coarse.empty()) return std::nullopt;
-  const Place place = OldPlace(keyframes, graph, old, params_);
-  const double spacing = match_.matcher.alignment.sample_spacing_m;
-  std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
-  std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
-  if (samples.empty() || place_samples.empty()) return std::nullopt;
+// The quick check (not in the paper): where the graph is already right -- a place revisited
+// after its loop was closed -- the estimate itself fits; it is taken when the scan fits the
+// place at least quick_min_fit, without shape matching or window search.
+std::optional<LoopClosure> LoopCloser::QuickMatch(const Sides& sides, const PoseGraph& graph) const {
+  const std::vector<RankedCandidate> quick =
+      sides.selector.Rank(sides.samples, {sides.estimate}, sides.estimate);
+  if (quick.empty() || quick.front().fit < params_.quick_min_fit) return std::nullopt;
+  const std::optional<RefinementResult> refined = Refine(sides, quick.front());
+  if (!refined) return std::nullopt;
+  std::optional<LoopClosure> loop = Verify(sides, *refined, graph);
+  if (loop && loop->inlier_ratio >= params_.quick_min_fit) return loop;
+  return std::nullopt;
+}
 
-  const Pose2 estimate = SensorPose(keyframes, graph, old).Inverse() * SensorPose(keyframes, graph, current);
-  CandidateSelectionParams selection = match_.selection;
-  selection.capture_distance_m = match_.coarse_gate_m;
-  selection.inlier_distance_m = match_.matcher.inlier_distance_m;
-  const Sides sides{now,
-                    then,
-                    old,
-                    current,
-                    graph_distance,
-                    std::move(samples),
-                    std::move(place_samples),
-                    CandidateSelector(place.fine, selection),
-                    internal::SegmentGrid(internal::MakeModelSegments(now.shapes.fine),
-                                          match_.matcher.inlier_distance_m)};
-  const CandidateSelector& selector = sides.selector;
-  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
-    RefinementResult refined = internal::RefineAgainstMap(sides.samples, place.fine, c.T_model_scan,
-                                                          std::nullopt, match_.refinement,
-                                                          match_.coarse_gate_m);
-    if (!refined.converged) return std::nullopt;
-    return refined;
-  };
-
-  // The quick check (not in the paper): where the graph is already right -- a place revisited
-  // after its loop was closed -- the estimate itself fits; it is taken when the scan fits the
-  // place at least quick_min_fit, without shape matching or window search.
-  const std::vector<RankedCandidate> quick = selector.Rank(sides.samples, {estimate}, estimate);
-  if (!quick.empty() && quick.front().fit >= params_.quick_min_fit) {
-    if (const std::optional<RefinementResult> refined = refine(quick.front())) {
-      std::optional<LoopClosure> loop = Verify(sides, *refined, graph);
-      if (loop && loop->inlier_ratio >= params_.quick_min_fit) return loop;
-    }
-  }
-
+std::optional<LoopClosure> LoopCloser::FullMatch(const Sides& sides, const PoseGraph& graph) const {
+  const Pose2& estimate = sides.estimate;
   // The window search over the whole place first: where it finds no pose at which the scan
   // overlaps the place at all, no candidate could pass the verification.
-  const double bound_m = CorrectionBoundM(graph_distance);
+  const double bound_m = CorrectionBoundM(sides.graph_distance);
   WindowSearchParams window = match_.window_search;
   window.resolution_m = params_.window_resolution_m;
   window.hit_sigma_m = params_.window_resolution_m;
   window.half_window_m = std::min(bound_m, params_.window_half_m);
-  window.half_window_rad = CorrectionBoundRad(graph_distance);
+  window.half_window_rad = CorrectionBoundRad(sides.graph_distance);
   window.max_node_evaluations = params_.window_max_evaluations;
   const Pose2 centre = bound_m <= params_.window_half_m ? estimate : Pose2(0.0, 0.0, estimate.theta);
-  const WindowSearch search(place.fine, window);
-  const std::vector<Point2> coarse_samples =
-      internal::Thinned(sides.samples, spacing, match_.window_search_spacing_m);
+  const WindowSearch search(sides.place.fine, window);
+  const std::vector<Point2> coarse_samples = internal::Thinned(
+      sides.samples, match_.matcher.alignment.sample_spacing_m, match_.window_search_spacing_m);
   const std::vector<WindowHypothesis> hypotheses = search.Search(coarse_samples, centre);
   double best_window_fit = 0.0;
   for (const WindowHypothesis& h : hypotheses) best_window_fit = std::max(best_window_fit, h.fit);
@@ -414,15 +427,31 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   // the window search's best poses.
   std::vector<Pose2> candidates = {estimate};
   for (const std::optional<Pose2>& guess : {std::optional<Pose2>(estimate), std::optional<Pose2>()}) {
-    if (auto c = ShapeCandidate(now.shapes, place.coarse, guess, estimate, match_)) candidates.push_back(*c);
+    if (auto c = ShapeCandidate(sides.now.shapes, sides.place.coarse, guess, estimate, match_)) {
+      candidates.push_back(*c);
+    }
   }
   for (const WindowHypothesis& h : hypotheses) candidates.push_back(h.T_model_scan);
   // Among fits that explain the scan about equally well the one nearest the estimate wins:
   // repetitive places (parallel corridors, rows of doors) offer look-alike fits farther away.
-  const auto selected = SelectRefined<RefinementResult>(selector.Rank(sides.samples, candidates, estimate),
-                                                        selection.max_refinements, refine);
+  // A candidate fitting less than refine_min_fit is not refined: the verification would refuse it.
+  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    if (c.fit < params_.refine_min_fit) return std::nullopt;
+    return Refine(sides, c);
+  };
+  const auto selected = SelectRefined<RefinementResult>(
+      sides.selector.Rank(sides.samples, candidates, estimate), match_.selection.max_refinements, refine);
   if (!selected) return std::nullopt;
   return Verify(sides, selected->second, graph);
+}
+
+std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& keyframes,
+                                               const PoseGraph& graph, int old,
+                                               double graph_distance) const {
+  const std::unique_ptr<Sides> sides = MakeSides(keyframes, graph, old, graph_distance);
+  if (!sides) return std::nullopt;
+  if (std::optional<LoopClosure> loop = QuickMatch(*sides, graph)) return loop;
+  return FullMatch(*sides, graph);
 }
 
 // The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the
@@ -455,9 +484,18 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
   const std::vector<double> graph_distance = GraphDistances(keyframes, graph, current);
   const std::vector<int> candidates = CandidatesAt(keyframes, graph, graph_distance);
   if (!candidates.empty()) round_robin_ += std::max(1, params_.max_candidates - 1);
+  // The quick check at every candidate first: where one passes, the graph is right there and
+  // the full searches of the others would only find the same.
+  std::vector<std::unique_ptr<Sides>> sides;
   for (const int old : candidates) {
-    std::optional<LoopClosure> candidate = MatchAt(keyframes, graph, old, graph_distance[old]);
-    if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = candidate;
+    if (auto s = MakeSides(keyframes, graph, old, graph_distance[old])) sides.push_back(std::move(s));
+  }
+  const auto keep_best = [&](std::optional<LoopClosure> candidate) {
+    if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = std::move(candidate);
+  };
+  for (const auto& s : sides) keep_best(QuickMatch(*s, graph));
+  if (!loop) {
+    for (const auto& s : sides) keep_best(FullMatch(*s, graph));
   }
   if (!loop) return false;
   ++num_found_;

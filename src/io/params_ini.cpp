@@ -171,6 +171,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "max_correction_per_m", "... or this per metre of pose-graph distance, if more (within the search radius)", &p.loop_closure.max_correction_per_m},
       {"loop_closure", "quick_min_fit", "take a closure at the graph's estimate without shape matching when this fraction of the scan fits the old place (above 1: always search)", &p.loop_closure.quick_min_fit},
       {"loop_closure", "window_min_fit", "skip shape matching of a place where the window search's best pose scores below this mean likelihood", &p.loop_closure.window_min_fit},
+      {"loop_closure", "refine_min_fit", "candidates of the full search fitting the old place less than this are not refined (the verification needs min_inlier_ratio)", &p.loop_closure.refine_min_fit},
       {"loop_closure", "strong_inlier_ratio", "a closure explaining this fraction both ways and correcting within max_correction_m/rad is used at once", &p.loop_closure.strong_inlier_ratio},
       {"loop_closure", "confirm_within_keyframes", "any other correcting closure waits for a consistent one within this many keyframes ...", &p.loop_closure.confirm_within_keyframes},
       {"loop_closure", "confirm_tolerance_m", "... consistent: the cycle of the two through the graph closes within this (m) ...", &p.loop_closure.confirm_tolerance_m},
