@@ -234,8 +234,11 @@ void VisibleIntervals(const Sweep& sweep, const SweptSegment& s, const BinPart* 
 // Sum of the bearing increments along a polyline (positive: counter-clockwise).
 double TurnedBearing(const Polyline& p) {
   double total = 0.0;
+  double bearing = p.empty() ? 0.0 : std::atan2(p[0].y(), p[0].x());
   for (std::size_t i = 0; i + 1 < p.size(); ++i) {
-    total += NormalizeAngle(std::atan2(p[i + 1].y(), p[i + 1].x()) - std::atan2(p[i].y(), p[i].x()));
+    const double next = std::atan2(p[i + 1].y(), p[i + 1].x());
+    total += NormalizeAngle(next - bearing);
+    bearing = next;
   }
   return total;
 }
@@ -332,14 +335,17 @@ std::vector<VisiblePolyline> ComputeVisibleShape(
     }
   }
   builder.Close();
-  auto key = [&](const VisiblePolyline& v) {
-    const Point2& p = v.points_sensor.front();
-    return sweep.Offset(std::atan2(p.y(), p.x()));
-  };
-  std::stable_sort(out.begin(), out.end(), [&](const VisiblePolyline& a, const VisiblePolyline& b) {
-    return key(a) < key(b);
-  });
-  return out;
+  // In bearing order of the first points (each bearing computed once; ties keep their order).
+  std::vector<std::pair<double, std::size_t>> order(out.size());
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    const Point2& p = out[i].points_sensor.front();
+    order[i] = {sweep.Offset(std::atan2(p.y(), p.x())), i};
+  }
+  std::sort(order.begin(), order.end());
+  std::vector<VisiblePolyline> sorted;
+  sorted.reserve(out.size());
+  for (const auto& [bearing, i] : order) sorted.push_back(std::move(out[i]));
+  return sorted;
 }
 
 VisibilityParams VisibilityForScan(const LaserScan& scan, const VisibilityParams& base,
