@@ -73,7 +73,9 @@ ArgParser MakeParser() {
           "  map.simplemap    the keyframe scans at their corrected poses, an MRPT CSimpleMap\n"
           "                   (observations2map, RawLogViewer; MRPT builds only)\n"
           "  stats.json       scans, wall time, per-scan times, map size, log issues\n"
-          "  scan_times.csv   per laser scan: scan index, timestamp, processing time (ms)\n\n"
+          "  scan_times.csv   per laser scan: scan index, timestamp, processing time (ms), how it was\n"
+          "                   placed (keyframe_track, fast_track, shape_match, unmatched), keyframe (1:\n"
+          "                   it updated the map)\n\n"
           "Continuing a map (--map MAP): MAP is loaded and is the starting map; the new scans\n"
           "extend it (its polylines are merged with what they see, as in mapping) and the\n"
           "output map holds both. The first scan is placed by the global search of 'shape-slam\n"
@@ -90,7 +92,9 @@ struct RunOutput {
   std::size_t first_scan = 0;  // index in the log of the first scan mapped (run --map)
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
-  std::size_t matched = 0, keyframes = 0, fast_tracked = 0;
+  std::vector<const char*> scan_track;  // per scan: how it was placed (FormatScanTimes)
+  std::vector<bool> scan_keyframe;
+  std::size_t matched = 0, keyframes = 0, fast_tracked = 0, keyframe_tracked = 0;
   int loop_closures = 0, loop_searches = 0, loop_closures_found = 0, map_rebuilds = 0,
       map_deformations = 0;
   long long keyframes_reinserted = 0;
@@ -107,9 +111,15 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
     const auto t1 = std::chrono::steady_clock::now();
     out.scan_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
+    out.scan_track.push_back(report.keyframe_tracked ? "keyframe_track"
+                             : report.fast_track     ? "fast_track"
+                             : report.matched        ? "shape_match"
+                                                     : "unmatched");
+    out.scan_keyframe.push_back(report.keyframe);
     out.matched += report.matched ? 1 : 0;
     out.keyframes += report.keyframe ? 1 : 0;
     out.fast_tracked += report.fast_track ? 1 : 0;
+    out.keyframe_tracked += report.keyframe_tracked ? 1 : 0;
     progress.Update(i + 1);
   }
   progress.Finish();
@@ -253,14 +263,16 @@ void ReportRunIssues(const RunOutput& out, const OdometryReport& odometry, bool 
   }
 }
 
-// One line per laser scan: its index, its timestamp and the time ShapeSlam::Process took.
+// One line per laser scan: its index, its timestamp, the time ShapeSlam::Process took and how
+// it was placed.
 std::string FormatScanTimes(const RunOutput& out) {
   std::ostringstream csv;
-  csv << "scan,timestamp_s,ms\n" << std::fixed;
+  csv << "scan,timestamp_s,ms,track,keyframe\n" << std::fixed;
   const std::size_t n = std::min(out.scan_ms.size(), out.trajectory.size());
   for (std::size_t i = 0; i < n; ++i) {
     csv << out.first_scan + i << ',' << std::setprecision(6) << out.trajectory[i].timestamp_s << ','
-        << std::setprecision(4) << out.scan_ms[i] << '\n';
+        << std::setprecision(4) << out.scan_ms[i] << ',' << out.scan_track[i] << ','
+        << (out.scan_keyframe[i] ? 1 : 0) << '\n';
   }
   return csv.str();
 }
@@ -287,6 +299,7 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
       .EndObject();
   json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(out.keyframes);
   json.Key("fast_tracked_scans").Value(out.fast_tracked);
+  json.Key("keyframe_tracked_scans").Value(out.keyframe_tracked);
   json.Key("matched_fraction").Value(MatchedFraction(out));
   json.Key("low_match_warning").Value(MatchedFraction(out) < kMinMatchedFraction);
   json.Key("loop_closures").Value(out.loop_closures);

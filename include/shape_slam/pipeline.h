@@ -126,6 +126,13 @@ struct ShapeSlamParams {
   double fast_track_min_fit = 0.95;
   double fast_track_max_correction_m = 0.15;    ///< metres
   double fast_track_max_correction_rad = 0.05;  ///< radians
+  /// Keyframe track (not in the paper), with odometry only: a scan whose prediction lies short of
+  /// the next keyframe (keyframe.min_*) gets the fast track against the last keyframe's
+  /// polylines alone, fit at least this, before the map's visible shape is even computed; the
+  /// map is matched as usual only when that falls short. Such a scan only gives a pose, which
+  /// the next keyframe's match against the map checks: on dense logs most scans are of this
+  /// kind. Above 1: off.
+  double keyframe_track_min_fit = 0.85;
   /// Cell size of the map's spatial index, metres.
   double index_cell_size_m = 2.0;
   /// Scan-to-scan registration without a guess (scan_matcher.h: `shape-slam match`, the MRPT
@@ -175,6 +182,7 @@ struct ScanReport {
   bool matched = false;              ///< the pose comes from a trusted match (else prediction)
   bool keyframe = false;             ///< the map was updated with this scan
   bool fast_track = false;           ///< matched by the fast track (fast_track_min_fit)
+  bool keyframe_tracked = false;     ///< matched by the keyframe track (keyframe_track_min_fit)
   bool used_odometry = false;        ///< the prediction used odometry
   int matched_pairs = 0;             ///< correspondences of eq. (4)
   int polylines = 0;                 ///< polylines extracted from the scan

@@ -51,6 +51,47 @@ std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Poly
   return match.T_model_scan;
 }
 
+// The candidate selection of the localization: the coarse gate captures, the matcher's inlier
+// distance scores.
+CandidateSelectionParams SelectionFor(const ShapeSlamParams& params) {
+  CandidateSelectionParams selection = params.selection;
+  selection.capture_distance_m = params.coarse_gate_m;
+  selection.inlier_distance_m = params.matcher.inlier_distance_m;
+  return selection;
+}
+
+// The estimate of a refinement, with its fit (inlier ratio) to the model.
+void Take(const RefinementResult& refined, double fit, const ShapeSlamParams& params,
+          Localization& loc) {
+  loc.correction = refined.T_map_scan;
+  loc.covariance = refined.covariance;
+  loc.rms_error_m = refined.rms_error_m;
+  loc.inlier_ratio = fit;
+  loc.trusted = fit >= params.min_inlier_ratio;
+}
+
+// The fast track (with odometry, not in the paper; ShapeSlamParams::fast_track_min_fit): the
+// prediction alone, refined against the model; taken when the scan fits it by
+// min_fit before and after and the estimate stays near the prediction.
+bool FastTrack(const std::vector<Point2>& samples, const std::vector<Polyline>& model,
+               const CandidateSelector& selector, const PosePrior& prior, double min_fit,
+               const ShapeSlamParams& params, Localization& loc) {
+  const auto near_prediction = [&](const Pose2& T) {
+    return T.Translation().norm() <= params.fast_track_max_correction_m &&
+           std::abs(T.theta) <= params.fast_track_max_correction_rad &&
+           WithinPrior(T, prior, params.max_prior_mahalanobis);
+  };
+  const std::vector<RankedCandidate> fast = selector.Rank(samples, {Pose2()}, Pose2(), near_prediction);
+  if (fast.empty() || fast.front().fit < min_fit) return false;
+  const RefinementResult refined =
+      RefineAlignment(samples, model, fast.front().T_model_scan, prior, params.refinement);
+  const double fit = refined.converged ? selector.Fit(samples, refined.T_map_scan) : 0.0;
+  if (fit < min_fit || !near_prediction(refined.T_map_scan)) return false;
+  Take(refined, fit, params, loc);
+  loc.fast_track = true;
+  return true;
+}
+
 }  // namespace
 
 // Covariance of the odometry increment T_prev_cur, as a prior on the correction.
@@ -135,9 +176,7 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   const std::vector<Point2> samples =
       AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
   if (samples.empty() || all.empty()) return loc;
-  CandidateSelectionParams selection = params.selection;
-  selection.capture_distance_m = params.coarse_gate_m;
-  selection.inlier_distance_m = params.matcher.inlier_distance_m;
+  CandidateSelectionParams selection = SelectionFor(params);
   if (!odometry_delta) {
     selection.prior_weight = params.motion_prior_weight;
     selection.prior_sigma_m = growth * params.motion_prior_sigma_m;
@@ -157,14 +196,6 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
   const auto accept = [&](const Pose2& T) {
     return prior ? WithinPrior(T, *prior, params.max_prior_mahalanobis)
                  : WithinMotionBound(T, growth, params);
-  };
-  // The estimate of a refinement, with its fit (inlier ratio) to the model.
-  const auto take = [&](const RefinementResult& refined, double fit) {
-    loc.correction = refined.T_map_scan;
-    loc.covariance = refined.covariance;
-    loc.rms_error_m = refined.rms_error_m;
-    loc.inlier_ratio = fit;
-    loc.trusted = fit >= params.min_inlier_ratio;
   };
   // The visible map as shape matching sees it, derived only when shape matching runs.
   std::vector<Polyline> map_coarse;
@@ -202,25 +233,11 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
         selector.Rank(samples, candidates, reference, accept), selection.max_refinements, refine);
     if (!selected) return;
     const RefinementResult& refined = selected->second;
-    take(refined, selector.Fit(samples, refined.T_map_scan));
+    Take(refined, selector.Fit(samples, refined.T_map_scan), params, loc);
   };
   // The fast track (with odometry): the prediction alone, refined; shape matching only when it
   // falls short.
-  const auto near_prediction = [&](const Pose2& T) {
-    return T.Translation().norm() <= params.fast_track_max_correction_m &&
-           std::abs(T.theta) <= params.fast_track_max_correction_rad && accept(T);
-  };
-  const std::vector<RankedCandidate> fast =
-      guess ? selector.Rank(samples, {*guess}, reference, near_prediction) : std::vector<RankedCandidate>{};
-  if (!fast.empty() && fast.front().fit >= params.fast_track_min_fit) {
-    const RefinementResult refined =
-        RefineAlignment(samples, all, fast.front().T_model_scan, prior, params.refinement);
-    const double fit = refined.converged ? selector.Fit(samples, refined.T_map_scan) : 0.0;
-    if (fit >= params.fast_track_min_fit && near_prediction(refined.T_map_scan)) {
-      take(refined, fit);
-      loc.fast_track = true;
-    }
-  }
+  if (prior) FastTrack(samples, all, selector, *prior, params.fast_track_min_fit, params, loc);
   const bool window_now = !odometry_delta && params.window_search_without_odometry;
   if (!loc.fast_track) localize(params.matcher, window_now ? growth : 0.0);
   // A scan that found no trusted match tries again: without odometry with as many seed pairs
@@ -241,6 +258,20 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     loc.correction = odometry_delta ? Pose2() : velocity_hint.value_or(Pose2());
     const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
     loc.coverage = InlierRatio(samples, near, loc.correction);
+  }
+  return loc;
+}
+
+Localization TrackKeyframe(const Shapes& shapes, const std::vector<Polyline>& keyframe_fine,
+                           const Pose2& odometry_delta, const ShapeSlamParams& params) {
+  Localization loc;
+  const std::vector<Point2> samples =
+      AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
+  if (samples.empty() || keyframe_fine.empty()) return loc;
+  const CandidateSelector selector(keyframe_fine, SelectionFor(params));
+  const PosePrior prior{Pose2(), OdometryCovariance(odometry_delta, params.odometry_noise)};
+  if (!FastTrack(samples, keyframe_fine, selector, prior, params.keyframe_track_min_fit, params, loc)) {
+    return Localization{};
   }
   return loc;
 }

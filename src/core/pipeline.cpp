@@ -68,6 +68,7 @@ void ShapeSlamParams::Validate() const {
   NonNegative(fast_track_min_fit, "ShapeSlamParams::fast_track_min_fit");
   NonNegative(fast_track_max_correction_m, "ShapeSlamParams::fast_track_max_correction_m");
   NonNegative(fast_track_max_correction_rad, "ShapeSlamParams::fast_track_max_correction_rad");
+  NonNegative(keyframe_track_min_fit, "ShapeSlamParams::keyframe_track_min_fit");
   if (!(max_untrusted_coverage >= 0.0 && max_untrusted_coverage <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
@@ -382,21 +383,35 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   odometry_.scans_predicted += report.used_odometry ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
 
+  // The last keyframe's polylines, in the sensor frame of the prediction.
+  const auto recent = [&](const std::vector<Polyline>& polylines) {
+    const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() *
+                                  KeyframePose(static_cast<int>(keyframes_.size()) - 1) *
+                                  places_.back().T_robot_sensor;
+    std::vector<Polyline> out;
+    out.reserve(polylines.size());
+    for (const Polyline& p : polylines) out.push_back(Transform(T_pred_keyframe, p));
+    return out;
+  };
   internal::Localization loc;
-  std::vector<VisiblePolyline> visible;
-  if (!map_.Empty() && !shapes.coarse.empty()) {
+  // A scan predicted short of the next keyframe first tries the last keyframe alone
+  // (ShapeSlamParams::keyframe_track); the map's visible shape is then not needed.
+  if (params_.keyframe_track_min_fit <= 1.0 && prediction.odometry_delta && !keyframes_.empty() &&
+      !shapes.coarse.empty() && !IsKeyframe(prediction.T_map_robot)) {
+    loc = internal::TrackKeyframe(shapes, recent(places_.back().shapes.fine),
+                                  *prediction.odometry_delta, params_);
+    report.keyframe_tracked = loc.fast_track;
+  }
+  std::vector<VisiblePolyline> visible;  // from the prediction
+  if (!report.keyframe_tracked && !map_.Empty() && !shapes.coarse.empty()) {
     const VisibilityParams visibility = VisibilityFor(scan, !prediction.odometry_delta, params_);
     visible = map_.Visible(T_map_sensor_pred, visibility);
     internal::LocalModel model;
     for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
     if (params_.use_last_keyframe && !keyframes_.empty()) {
-      const LoopKeyframe& last = places_.back();
-      const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() *
-                                    KeyframePose(static_cast<int>(keyframes_.size()) - 1) *
-                                    last.T_robot_sensor;
-      for (const Polyline& p : last.shapes.coarse) model.recent_coarse.push_back(Transform(T_pred_keyframe, p));
-      for (const Polyline& p : last.shapes.fine) model.recent_fine.push_back(Transform(T_pred_keyframe, p));
+      model.recent_coarse = recent(places_.back().shapes.coarse);
+      model.recent_fine = recent(places_.back().shapes.fine);
     }
     std::optional<Pose2> velocity_hint;
     if (prediction.T_pred_robot_velocity) {
@@ -409,7 +424,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
-  report.fast_track = loc.fast_track;
+  report.fast_track = loc.fast_track && !report.keyframe_tracked;
   lost_scans_ = loc.trusted || map_.Empty() ? 0 : lost_scans_ + 1;
   if (last_T_map_robot_) {
     recent_motions_.push_back(last_T_map_robot_->Inverse() * report.T_map_robot);
@@ -432,8 +447,12 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   if (!shapes.fine.empty() && may_update && IsKeyframe(report.T_map_robot)) {
     std::vector<Polyline> perceived_map;
     for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
-    const Pose2 correction_inverse = loc.correction.Inverse();
-    for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
+    if (report.keyframe_tracked) {
+      visible = map_.Visible(T_map_sensor, VisibilityFor(scan, /*no_estimate=*/false, params_));
+    } else {
+      const Pose2 correction_inverse = loc.correction.Inverse();
+      for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
+    }
     const bool trusted = loc.trusted || map_.Empty();
     report.map_update =
         UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);

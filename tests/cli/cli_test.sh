@@ -40,7 +40,7 @@ for f in trajectory.tum map.polylines map.svg map.png map.pgm map.yaml map.gridm
   scan_times.csv stats.json; do
   [ -s "$WORK/head/$f" ] || fail "run did not write $f"
 done
-[ "$(head -n 1 "$WORK/head/scan_times.csv")" = "scan,timestamp_s,ms" ] || fail "scan_times.csv header"
+[ "$(head -n 1 "$WORK/head/scan_times.csv")" = "scan,timestamp_s,ms,track,keyframe" ] || fail "scan_times.csv header"
 [ "$(($(wc -l < "$WORK/head/scan_times.csv") - 1))" = "$(grep -vc "^#" "$WORK/head/trajectory.tum")" ] ||
   fail "scan_times.csv: not one line per scan"
 head -c 2 "$WORK/head/map.pgm" | grep -q P5 || fail "map.pgm is not a binary PGM"

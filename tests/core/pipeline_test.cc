@@ -129,10 +129,12 @@ TEST(PipelineTest, FastTrackPlacesTheScansThePredictionExplains) {
     ate = EvaluateTrajectory(slam.Trajectory(), r.truth, {}).ate_rmse_m;
     return fast;
   };
-  ShapeSlamParams off;
+  ShapeSlamParams on;
+  on.keyframe_track_min_fit = 1.5;  // every scan is matched against the map
+  ShapeSlamParams off = on;
   off.fast_track_min_fit = 1.5;
   double ate_on = 0.0, ate_off = 0.0;
-  const int on_count = fast_tracked(run, ShapeSlamParams{}, ate_on);
+  const int on_count = fast_tracked(run, on, ate_on);
   EXPECT_EQ(fast_tracked(run, off, ate_off), 0);
   EXPECT_GT(on_count, static_cast<int>(run.scans.size()) / 2);
   EXPECT_LT(ate_on, 0.05);
@@ -149,8 +151,44 @@ TEST(PipelineTest, FastTrackPlacesTheScansThePredictionExplains) {
   std::vector<ScanReport> reports;
   for (const LaserScan& scan : run.scans) reports.push_back(slam.Process(scan));
   EXPECT_FALSE(reports[slip].fast_track);
+  EXPECT_FALSE(reports[slip].keyframe_tracked);
   EXPECT_TRUE(reports[slip].matched);
   EXPECT_LT(EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m, 0.05);
+}
+
+// The keyframe track: a scan predicted short of the next keyframe (0.15 m steps, keyframes every
+// 0.2 m: about every other scan on the straights) is placed against the last keyframe alone,
+// never updates the map itself, and the trajectory is as right as with every scan matched
+// against the map. Above 1 it is off.
+TEST(PipelineTest, KeyframeTrackPlacesTheScansBetweenKeyframes) {
+  const SimRun run = Simulate(6);
+  const auto track = [&](const ShapeSlamParams& params, int& keyframes, double& ate) {
+    ShapeSlam slam(params);
+    int tracked = 0;
+    keyframes = 0;
+    for (const LaserScan& scan : run.scans) {
+      const ScanReport report = slam.Process(scan);
+      tracked += report.keyframe_tracked ? 1 : 0;
+      keyframes += report.keyframe ? 1 : 0;
+      if (report.keyframe_tracked) EXPECT_TRUE(report.matched && !report.fast_track);
+    }
+    ate = EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m;
+    return tracked;
+  };
+  ShapeSlamParams off;
+  off.keyframe_track_min_fit = 1.5;
+  int keyframes_on = 0, keyframes_off = 0;
+  double ate_on = 0.0, ate_off = 0.0;
+  const int tracked = track(ShapeSlamParams{}, keyframes_on, ate_on);
+  EXPECT_EQ(track(off, keyframes_off, ate_off), 0);
+  const int between = static_cast<int>(run.scans.size()) - keyframes_off;
+  ASSERT_GT(between, static_cast<int>(run.scans.size()) / 4);
+  EXPECT_GT(tracked, between / 2);
+  EXPECT_LT(ate_on, 0.05);
+  EXPECT_LT(ate_off, 0.05);
+  ShapeSlamParams invalid;
+  invalid.keyframe_track_min_fit = -0.1;
+  EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
 }
 
 // A rebuild after loop closure starts from the last map checkpoint before the first keyframe

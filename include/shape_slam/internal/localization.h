@@ -68,4 +68,10 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
                       const std::optional<Pose2>& velocity_hint, int lost_scans,
                       const ShapeSlamParams& params);
 
+/// The keyframe track (ShapeSlamParams::keyframe_track): the fast track of the odometry
+/// prediction against the last keyframe's alignment polylines alone (in the sensor frame of the
+/// prediction). fast_track is false, and nothing else set, when it falls short.
+Localization TrackKeyframe(const Shapes& shapes, const std::vector<Polyline>& keyframe_fine,
+                           const Pose2& odometry_delta, const ShapeSlamParams& params);
+
 }  // namespace shape_slam::internal
