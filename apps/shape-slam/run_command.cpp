@@ -333,12 +333,14 @@ struct GridOutputs {
   double resolution_m = 0.05;
 };
 
-using OutputFiles = std::vector<std::pair<std::string, std::string>>;  // name, content
-
 // The occupancy grids and the simple map, from the keyframes at their final corrected poses
-// (after the last pose-graph optimisation) and the map's polylines.
-OutputFiles RenderGridOutputs(const ShapeSlam& slam, const GridOutputs& what) {
-  OutputFiles files;
+// (after the last pose-graph optimisation) and the map's polylines, staged into `dir`.
+void StageGridOutputs(const ShapeSlam& slam, const GridOutputs& what, const std::string& dir,
+                      io::StagedFiles& files, std::vector<std::string>& names) {
+  const auto stage = [&](const std::string& name, const std::string& content) {
+    files.Stage((std::filesystem::path(dir) / name).string(), content);
+    names.push_back(name);
+  };
   const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
   if (what.ros || what.gridmap) {
     std::vector<Polyline> walls;
@@ -347,40 +349,45 @@ OutputFiles RenderGridOutputs(const ShapeSlam& slam, const GridOutputs& what) {
     params.resolution_m = what.resolution_m;
     const io::OccupancyGrid grid = io::BuildOccupancyGrid(walls, keyframes, params);
     if (what.ros) {
-      files.emplace_back("map.pgm", io::FormatPgm(grid));
-      files.emplace_back("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
+      stage("map.pgm", io::FormatPgm(grid));
+      stage("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
     }
 #if SHAPE_SLAM_HAVE_MRPT
-    if (what.gridmap) files.emplace_back("map.gridmap", io::FormatMrptGridmap(grid));
+    if (what.gridmap) stage("map.gridmap", io::FormatMrptGridmap(grid));
 #endif
   }
 #if SHAPE_SLAM_HAVE_MRPT
-  if (what.simplemap) files.emplace_back("map.simplemap", io::FormatMrptSimplemap(keyframes));
+  if (what.simplemap) stage("map.simplemap", io::FormatMrptSimplemap(keyframes));
 #endif
-  return files;
 }
 
-// Everything is rendered before the first file is replaced, so a failure leaves the directory
-// as it was. Returns the names written, in order.
+// Every file is written to a temporary file as soon as it is rendered (so that only one
+// rendering is in memory at a time: the grids of a large map are tens of MB), and all replace
+// their targets only once every one is written: a failure leaves the directory as it was.
+// Returns the names written, in order.
 std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& out,
                                       const ShapeSlam& slam, const GridOutputs& grids,
                                       const std::string& stats_json, const std::string& map_text,
                                       const std::string& title) {
-  std::vector<Point2> path;
-  for (const StampedPose& p : out.trajectory) path.push_back(p.pose.Translation());
-  const io::Drawing drawing = io::MakeMapDrawing(slam.Map(), path, title);
-  OutputFiles files = {{"trajectory.tum", io::FormatTum(out.trajectory)},
-                       {"map.polylines", map_text},
-                       {"map.svg", io::RenderSvg(drawing)},
-                       {"map.png", io::RenderPng(drawing)}};
-  for (auto& file : RenderGridOutputs(slam, grids)) files.push_back(std::move(file));
-  files.emplace_back("scan_times.csv", FormatScanTimes(out));
-  files.emplace_back("stats.json", stats_json);
+  io::StagedFiles files;
   std::vector<std::string> names;
-  for (const auto& [name, content] : files) {
-    io::WriteFileAtomically((std::filesystem::path(dir) / name).string(), content);
+  const auto stage = [&](const std::string& name, const std::string& content) {
+    files.Stage((std::filesystem::path(dir) / name).string(), content);
     names.push_back(name);
+  };
+  stage("trajectory.tum", io::FormatTum(out.trajectory));
+  stage("map.polylines", map_text);
+  {
+    std::vector<Point2> path;
+    for (const StampedPose& p : out.trajectory) path.push_back(p.pose.Translation());
+    const io::Drawing drawing = io::MakeMapDrawing(slam.Map(), path, title);
+    stage("map.svg", io::RenderSvg(drawing));
+    stage("map.png", io::RenderPng(drawing));
   }
+  StageGridOutputs(slam, grids, dir, files, names);
+  stage("scan_times.csv", FormatScanTimes(out));
+  stage("stats.json", stats_json);
+  files.Commit();
   return names;
 }
 
@@ -437,6 +444,7 @@ int RunRun(const Args& args) {
   SetFatalContext("mapping the log " + log.substr(0, 400));
   RunOutput out = RunMapper(slam, scans, quiet);
   out.first_scan = start ? start->first.scan : 0;
+  std::vector<LaserScan>().swap(scans);  // the keyframes keep what the outputs need
   const std::string map_text = io::FormatMapFile(slam.Map());
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

@@ -5,6 +5,8 @@
 
 #include <stdexcept>
 #include <string>
+#include <utility>
+#include <vector>
 
 namespace shape_slam::io {
 
@@ -17,6 +19,25 @@ class OutputError : public std::runtime_error {
 /// Replaces `path` by `content` atomically (temporary file in the same directory + fsync +
 /// rename). Throws OutputError; on failure the temporary file is removed and `path` untouched.
 void WriteFileAtomically(const std::string& path, const std::string& content);
+
+/// Files replaced together, without holding their contents in memory: Stage writes a file's
+/// content to a temporary file beside its target (flushed to disk, as WriteFileAtomically);
+/// Commit renames every staged file over its target, in the order staged. Temporary files not
+/// committed are removed when the object goes away: a failure before Commit leaves every target
+/// as it was. Throws OutputError.
+class StagedFiles {
+ public:
+  StagedFiles() = default;
+  StagedFiles(const StagedFiles&) = delete;
+  StagedFiles& operator=(const StagedFiles&) = delete;
+  ~StagedFiles();
+
+  void Stage(const std::string& path, const std::string& content);
+  void Commit();
+
+ private:
+  std::vector<std::pair<std::string, std::string>> staged_;  // temporary file, target
+};
 
 /// Creates `directory` (and its parents) unless it exists. Throws OutputError when it cannot,
 /// or when the path exists and is not a directory.

@@ -28,9 +28,9 @@ bool WriteAll(int fd, const std::string& content) {
   return true;
 }
 
-}  // namespace
-
-void WriteFileAtomically(const std::string& path, const std::string& content) {
+// Writes `content` to a new temporary file beside `path` (mode 0644, flushed to disk) and
+// returns its name. Throws OutputError; on failure nothing is left behind.
+std::string WriteTemporary(const std::string& path, const std::string& content) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw OutputError(path + ": is a directory, cannot write a file");
@@ -47,10 +47,37 @@ void WriteFileAtomically(const std::string& path, const std::string& content) {
     ::unlink(tmpl.c_str());
     throw OutputError(path + ": write failed: " + (ok ? Reason() : write_reason));
   }
-  if (::rename(tmpl.c_str(), path.c_str()) != 0) {
+  return tmpl;
+}
+
+// Renames the temporary file over `path`; on failure removes it and throws OutputError.
+void ReplaceWith(const std::string& temporary, const std::string& path) {
+  if (::rename(temporary.c_str(), path.c_str()) != 0) {
     const std::string reason = Reason();
-    ::unlink(tmpl.c_str());
+    ::unlink(temporary.c_str());
     throw OutputError(path + ": cannot replace the file: " + reason);
+  }
+}
+
+}  // namespace
+
+void WriteFileAtomically(const std::string& path, const std::string& content) {
+  ReplaceWith(WriteTemporary(path, content), path);
+}
+
+StagedFiles::~StagedFiles() {
+  for (const auto& [temporary, path] : staged_) ::unlink(temporary.c_str());
+}
+
+void StagedFiles::Stage(const std::string& path, const std::string& content) {
+  staged_.emplace_back(WriteTemporary(path, content), path);
+}
+
+void StagedFiles::Commit() {
+  while (!staged_.empty()) {
+    const auto [temporary, path] = staged_.front();
+    staged_.erase(staged_.begin());
+    ReplaceWith(temporary, path);
   }
 }
 

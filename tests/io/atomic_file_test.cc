@@ -40,6 +40,52 @@ TEST(AtomicFileTest, FailureKeepsTheOldFile) {
   EXPECT_EQ(ReadFile(path), "old results");
 }
 
+int CountFiles(const std::string& dir) {
+  int files = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(dir)) {
+    (void)entry;
+    ++files;
+  }
+  return files;
+}
+
+// Staged files replace their targets only at Commit; until then (and after a failure) the
+// targets are as they were, and no temporary file outlives the StagedFiles.
+TEST(AtomicFileTest, StagedFilesReplaceTheirTargetsTogether) {
+  TempDir dir;
+  const std::string a = dir.Write("a.txt", "old a");
+  const std::string b = dir.Path("b.txt");
+  {
+    StagedFiles files;
+    files.Stage(a, "new a");
+    files.Stage(b, "new b");
+    EXPECT_EQ(ReadFile(a), "old a");
+    EXPECT_FALSE(std::filesystem::exists(b));
+  }  // not committed: both temporaries removed
+  EXPECT_EQ(ReadFile(a), "old a");
+  EXPECT_FALSE(std::filesystem::exists(b));
+  EXPECT_EQ(CountFiles(dir.path()), 1);
+  {
+    StagedFiles files;
+    files.Stage(a, "new a");
+    // The second output cannot be written: the first target must stay as it was.
+    std::filesystem::create_directory(dir.Path("blocked"));
+    EXPECT_THROW(files.Stage(dir.Path("blocked"), "x"), OutputError);
+  }
+  EXPECT_EQ(ReadFile(a), "old a");
+  EXPECT_EQ(CountFiles(dir.path()), 2);  // a.txt and the directory
+  StagedFiles files;
+  files.Stage(a, "new a");
+  files.Stage(b, "new b");
+  files.Commit();
+  EXPECT_EQ(ReadFile(a), "new a");
+  EXPECT_EQ(ReadFile(b), "new b");
+  EXPECT_EQ(CountFiles(dir.path()), 3);
+  struct stat st {};
+  ASSERT_EQ(::stat(b.c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0777, 0644u);
+}
+
 TEST(AtomicFileTest, EnsureDirectoryCreatesParentsAndRejectsFiles) {
   TempDir dir;
   EnsureDirectory(dir.Path("a/b/c"));
