@@ -1,14 +1,17 @@
 #include "shape_slam_io/mrpt_maps.h"
 
-#include <mrpt/io/CMemoryStream.h>
-#include <mrpt/io/zip.h>
+#include <mrpt/io/CStream.h>
 #include <mrpt/maps/COccupancyGridMap2D.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <zlib.h>
+
 #include <cstdint>
+#include <string>
+#include <utility>
 
 #include "mrpt_scan_internal.h"
 #include "shape_slam_io/atomic_file.h"
@@ -16,18 +19,68 @@
 namespace shape_slam::io {
 namespace {
 
-/// What CFileGZOutputStream would write for the object: its serialization, gzip-compressed.
-std::string GzipSerialized(const mrpt::serialization::CSerializable& object, const char* what) {
-  mrpt::io::CMemoryStream buffer;
-  auto archive = mrpt::serialization::archiveFrom(buffer);
-  archive << object;
-  const auto* data = static_cast<const std::uint8_t*>(buffer.getRawBufferData());
-  const std::vector<std::uint8_t> plain(data, data + buffer.getTotalBytesCount());
-  std::vector<std::uint8_t> gz;
-  if (!mrpt::io::zip::compress_gz_data_block(plain, gz, 6)) {
-    throw OutputError(std::string("cannot compress the ") + what);
+/// An MRPT output stream that gzip-compresses (zlib, level 6) what is written into a string as
+/// it comes: a grid map of tens of MB is never held uncompressed.
+class GzipStringStream : public mrpt::io::CStream {
+ public:
+  GzipStringStream() {
+    if (deflateInit2(&z_, 6, Z_DEFLATED, 15 + 16, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
+      throw OutputError("cannot start gzip compression");
+    }
   }
-  return std::string(gz.begin(), gz.end());
+  ~GzipStringStream() override { deflateEnd(&z_); }
+  GzipStringStream(const GzipStringStream&) = delete;
+  GzipStringStream& operator=(const GzipStringStream&) = delete;
+
+  size_t Read(void*, size_t) override { throw OutputError("gzip stream: not readable"); }
+  size_t Write(const void* buffer, size_t count) override {
+    z_.next_in = static_cast<Bytef*>(const_cast<void*>(buffer));
+    z_.avail_in = static_cast<uInt>(count);
+    Deflate(Z_NO_FLUSH);
+    written_ += count;
+    return count;
+  }
+  uint64_t Seek(int64_t, TSeekOrigin) override { throw OutputError("gzip stream: not seekable"); }
+  uint64_t getTotalBytesCount() const override { return written_; }
+  uint64_t getPosition() const override { return written_; }
+
+  /// Ends the compressed stream and returns it.
+  std::string Finish() {
+    z_.next_in = nullptr;
+    z_.avail_in = 0;
+    Deflate(Z_FINISH);
+    return std::move(out_);
+  }
+
+ private:
+  void Deflate(int flush) {
+    unsigned char chunk[1 << 16];
+    int rc = Z_OK;
+    do {
+      z_.next_out = chunk;
+      z_.avail_out = sizeof(chunk);
+      rc = deflate(&z_, flush);
+      if (rc == Z_STREAM_ERROR) throw OutputError("gzip compression failed");
+      out_.append(reinterpret_cast<const char*>(chunk), sizeof(chunk) - z_.avail_out);
+    } while (z_.avail_out == 0 || (flush == Z_FINISH && rc != Z_STREAM_END));
+  }
+
+  z_stream z_{};
+  std::string out_;
+  uint64_t written_ = 0;
+};
+
+/// What CFileGZOutputStream would write for the object: its serialization, gzip-compressed
+/// (compressed as it is serialized).
+std::string GzipSerialized(const mrpt::serialization::CSerializable& object, const char* what) {
+  try {
+    GzipStringStream stream;
+    auto archive = mrpt::serialization::archiveFrom(stream);
+    archive << object;
+    return stream.Finish();
+  } catch (const OutputError& e) {
+    throw OutputError(std::string("cannot compress the ") + what + ": " + e.what());
+  }
 }
 
 /// MRPT's cell value is the probability of the cell being FREE: 1 free, 0 occupied (see

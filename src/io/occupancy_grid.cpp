@@ -36,17 +36,20 @@ std::vector<Ray> RaysOf(const ShapeSlam::KeyframeView& keyframe, double max_free
   return rays;
 }
 
-/// The box around the walls and the rays (sensor positions and beam ends); the origin alone
-/// when there is nothing.
+/// The box around the walls and the rays of the keyframes (sensor positions and beam ends); the
+/// origin alone when there is nothing. The rays are made keyframe by keyframe, never all kept.
 std::pair<Point2, Point2> BoundingBox(const std::vector<Polyline>& walls,
-                                      const std::vector<Ray>& rays) {
+                                      const std::vector<ShapeSlam::KeyframeView>& keyframes,
+                                      double max_free_range_m) {
   Point2 min = Point2::Constant(std::numeric_limits<double>::infinity()), max = -min;
   for (const Polyline& wall : walls) {
     for (const Point2& p : wall) min = min.cwiseMin(p), max = max.cwiseMax(p);
   }
-  for (const Ray& ray : rays) {
-    min = min.cwiseMin(ray.from).cwiseMin(ray.to);
-    max = max.cwiseMax(ray.from).cwiseMax(ray.to);
+  for (const ShapeSlam::KeyframeView& keyframe : keyframes) {
+    for (const Ray& ray : RaysOf(keyframe, max_free_range_m)) {
+      min = min.cwiseMin(ray.from).cwiseMin(ray.to);
+      max = max.cwiseMax(ray.from).cwiseMax(ray.to);
+    }
   }
   if (!min.allFinite() || !max.allFinite()) return {Point2::Zero(), Point2::Zero()};
   return {min, max};
@@ -153,12 +156,7 @@ OccupancyGrid BuildOccupancyGrid(const std::vector<Polyline>& walls,
                                  const std::vector<ShapeSlam::KeyframeView>& keyframes,
                                  const OccupancyGridParams& params) {
   params.Validate();
-  std::vector<Ray> rays;
-  for (const ShapeSlam::KeyframeView& keyframe : keyframes) {
-    const std::vector<Ray> more = RaysOf(keyframe, params.max_free_range_m);
-    rays.insert(rays.end(), more.begin(), more.end());
-  }
-  const auto [min, max] = BoundingBox(walls, rays);
+  const auto [min, max] = BoundingBox(walls, keyframes, params.max_free_range_m);
   OccupancyGrid walls_only = EmptyGrid(min, max, params);
   for (const Polyline& wall : walls) {
     for (std::size_t i = 0; i < wall.size(); ++i) {
@@ -169,9 +167,11 @@ OccupancyGrid BuildOccupancyGrid(const std::vector<Polyline>& walls,
     }
   }
   OccupancyGrid grid = walls_only;
-  for (const Ray& ray : rays) {
-    for (const Eigen::Vector2i& cell : FreeCells(walls_only, ray)) {
-      Set(grid, cell, CellState::kFree);
+  for (const ShapeSlam::KeyframeView& keyframe : keyframes) {
+    for (const Ray& ray : RaysOf(keyframe, params.max_free_range_m)) {
+      for (const Eigen::Vector2i& cell : FreeCells(walls_only, ray)) {
+        Set(grid, cell, CellState::kFree);
+      }
     }
   }
   for (std::size_t i = 0; i < grid.cells.size(); ++i) {
