@@ -9,6 +9,9 @@
 #include <string>
 #include <utility>
 #include <vector>
+#ifdef __linux__
+#include <malloc.h>  // malloc_trim (glibc)
+#endif
 
 #include "cli.h"
 #include "commands.h"
@@ -347,13 +350,13 @@ void StageGridOutputs(const ShapeSlam& slam, const GridOutputs& what, const std:
     for (const PolylineId id : slam.Map().Ids()) walls.push_back(slam.Map().Get(id).points);
     io::OccupancyGridParams params;
     params.resolution_m = what.resolution_m;
-    const io::OccupancyGrid grid = io::BuildOccupancyGrid(walls, keyframes, params);
+    io::OccupancyGrid grid = io::BuildOccupancyGrid(walls, keyframes, params);
     if (what.ros) {
       stage("map.pgm", io::FormatPgm(grid));
       stage("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
     }
 #if SHAPE_SLAM_HAVE_MRPT
-    if (what.gridmap) stage("map.gridmap", io::FormatMrptGridmap(grid));
+    if (what.gridmap) stage("map.gridmap", io::FormatMrptGridmap(std::move(grid)));
 #endif
   }
 #if SHAPE_SLAM_HAVE_MRPT
@@ -445,6 +448,9 @@ int RunRun(const Args& args) {
   RunOutput out = RunMapper(slam, scans, quiet);
   out.first_scan = start ? start->first.scan : 0;
   std::vector<LaserScan>().swap(scans);  // the keyframes keep what the outputs need
+#if defined(__linux__) && defined(__GLIBC__)
+  ::malloc_trim(0);  // what mapping freed goes back to the system before the grids are made
+#endif
   const std::string map_text = io::FormatMapFile(slam.Map());
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();

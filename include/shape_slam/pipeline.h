@@ -215,7 +215,9 @@ class ShapeSlam {
 
   /// At the end of the log: a final optimisation of the pose graph (when it holds loop edges)
   /// and the map rebuilt from the keyframes at their corrected poses. Call it before writing the
-  /// outputs; Process may still be called afterwards.
+  /// outputs; Process may still be called afterwards. It frees the rebuild checkpoints
+  /// (rebuild_checkpoint_every; tens of MB on a long log): a rebuild after it starts from the
+  /// first keyframe.
   void Finish();
 
   const PolylineMap& Map() const { return map_; }

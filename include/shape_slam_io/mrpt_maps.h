@@ -22,8 +22,9 @@ namespace shape_slam::io {
 
 /// The gridmap file content: the same cells, size, resolution and origin as `grid`. MRPT's cell
 /// value is the probability of being free: 0 (occupied), 1 (free), 0.5 (unknown). Throws
-/// OutputError.
-std::string FormatMrptGridmap(const OccupancyGrid& grid);
+/// OutputError. `grid` is taken by value and released once copied into MRPT's map, before the
+/// serialization: a caller done with it moves it in (a large map's grid is tens of MB).
+std::string FormatMrptGridmap(OccupancyGrid grid);
 
 /// The simplemap file content of the keyframes (ShapeSlam::Keyframes()). Throws LogError for a
 /// scan an MRPT 2D range scan cannot hold (rawlog_writer.h), OutputError when compressing fails.

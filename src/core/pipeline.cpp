@@ -359,6 +359,7 @@ void ShapeSlam::Finish() {
       last_T_map_robot_ = KeyframePose(anchors_.back().keyframe) * anchors_.back().T_keyframe_robot;
     }
   }
+  std::vector<MapCheckpoint>().swap(checkpoints_);
 }
 
 std::vector<StampedPose> ShapeSlam::Trajectory() const {

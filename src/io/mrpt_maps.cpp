@@ -96,7 +96,7 @@ float FreeProbability(CellState state) {
 
 }  // namespace
 
-std::string FormatMrptGridmap(const OccupancyGrid& grid) {
+std::string FormatMrptGridmap(OccupancyGrid grid) {
   const double res = grid.resolution_m;
   mrpt::maps::COccupancyGridMap2D map;
   map.setSize(static_cast<float>(grid.origin_m.x()),
@@ -112,6 +112,7 @@ std::string FormatMrptGridmap(const OccupancyGrid& grid) {
   for (int iy = 0; iy < grid.height; ++iy) {
     for (int ix = 0; ix < grid.width; ++ix) map.setCell(ix, iy, FreeProbability(grid.At(ix, iy)));
   }
+  grid = OccupancyGrid();
   return GzipSerialized(map, "grid map");
 }
 
