@@ -170,7 +170,9 @@ TEST(PipelineTest, KeyframeTrackPlacesTheScansBetweenKeyframes) {
       const ScanReport report = slam.Process(scan);
       tracked += report.keyframe_tracked ? 1 : 0;
       keyframes += report.keyframe ? 1 : 0;
-      if (report.keyframe_tracked) EXPECT_TRUE(report.matched && !report.fast_track);
+      if (report.keyframe_tracked) {
+        EXPECT_TRUE(report.matched && !report.fast_track);
+      }
     }
     ate = EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m;
     return tracked;
