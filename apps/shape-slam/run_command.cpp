@@ -104,7 +104,9 @@ struct RunOutput {
   double processing_s = 0.0;
 };
 
-RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool quiet) {
+// Maps the scans in order; each is released once processed (the mapper keeps what it needs of
+// the keyframes), so that the log and the map it becomes are not both whole in memory.
+RunOutput RunMapper(ShapeSlam& slam, std::vector<LaserScan>& scans, bool quiet) {
   RunOutput out;
   ProgressBar progress(scans.size(), "mapping", !quiet);
   const auto start = std::chrono::steady_clock::now();
@@ -112,6 +114,8 @@ RunOutput RunMapper(ShapeSlam& slam, const std::vector<LaserScan>& scans, bool q
     const auto t0 = std::chrono::steady_clock::now();
     const ScanReport report = slam.Process(scans[i]);
     const auto t1 = std::chrono::steady_clock::now();
+    std::vector<double>().swap(scans[i].ranges_m);
+    std::vector<double>().swap(scans[i].angles_rad);
     out.scan_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
     out.scan_track.push_back(report.keyframe_tracked ? "keyframe_track"
