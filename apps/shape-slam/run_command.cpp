@@ -95,14 +95,27 @@ struct RunOutput {
   std::size_t first_scan = 0;  // index in the log of the first scan mapped (run --map)
   std::vector<StampedPose> trajectory;
   std::vector<double> scan_ms;
-  std::vector<const char*> scan_track;  // per scan: how it was placed (FormatScanTimes)
-  std::vector<bool> scan_keyframe;
-  std::size_t matched = 0, keyframes = 0, fast_tracked = 0, keyframe_tracked = 0;
+  std::vector<const char*> scan_track;  // per scan: how it was placed (TrackName)
+  std::vector<bool> scan_keyframe;      // per scan: it updated the map
+  std::size_t matched = 0;
   int loop_closures = 0, loop_searches = 0, loop_closures_found = 0, map_rebuilds = 0,
       map_deformations = 0;
   long long keyframes_reinserted = 0;
   double processing_s = 0.0;
 };
+
+// How a scan was placed, as scan_times.csv names it.
+const char* TrackName(const ScanReport& report) {
+  if (report.keyframe_tracked) return "keyframe_track";
+  if (report.fast_track) return "fast_track";
+  return report.matched ? "shape_match" : "unmatched";
+}
+
+// Scans placed as `track` (a TrackName).
+std::size_t CountTrack(const RunOutput& out, const std::string& track) {
+  return static_cast<std::size_t>(std::count_if(out.scan_track.begin(), out.scan_track.end(),
+                                                [&](const char* t) { return track == t; }));
+}
 
 // Maps the scans in order; each is released once processed (the mapper keeps what it needs of
 // the keyframes), so that the log and the map it becomes are not both whole in memory.
@@ -118,15 +131,9 @@ RunOutput RunMapper(ShapeSlam& slam, std::vector<LaserScan>& scans, bool quiet) 
     std::vector<double>().swap(scans[i].angles_rad);
     out.scan_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
     out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
-    out.scan_track.push_back(report.keyframe_tracked ? "keyframe_track"
-                             : report.fast_track     ? "fast_track"
-                             : report.matched        ? "shape_match"
-                                                     : "unmatched");
+    out.scan_track.push_back(TrackName(report));
     out.scan_keyframe.push_back(report.keyframe);
     out.matched += report.matched ? 1 : 0;
-    out.keyframes += report.keyframe ? 1 : 0;
-    out.fast_tracked += report.fast_track ? 1 : 0;
-    out.keyframe_tracked += report.keyframe_tracked ? 1 : 0;
     progress.Update(i + 1);
   }
   progress.Finish();
@@ -304,9 +311,11 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("last_tenth_median")
       .Value(Percentile({out.scan_ms.end() - tenth, out.scan_ms.end()}, 0.5))
       .EndObject();
-  json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(out.keyframes);
-  json.Key("fast_tracked_scans").Value(out.fast_tracked);
-  json.Key("keyframe_tracked_scans").Value(out.keyframe_tracked);
+  const auto keyframes = static_cast<std::size_t>(
+      std::count(out.scan_keyframe.begin(), out.scan_keyframe.end(), true));
+  json.Key("matched_scans").Value(out.matched).Key("keyframes").Value(keyframes);
+  json.Key("fast_tracked_scans").Value(CountTrack(out, "fast_track"));
+  json.Key("keyframe_tracked_scans").Value(CountTrack(out, "keyframe_track"));
   json.Key("matched_fraction").Value(MatchedFraction(out));
   json.Key("low_match_warning").Value(MatchedFraction(out) < kMinMatchedFraction);
   json.Key("loop_closures").Value(out.loop_closures);
@@ -341,13 +350,10 @@ struct GridOutputs {
 };
 
 // The occupancy grids and the simple map, from the keyframes at their final corrected poses
-// (after the last pose-graph optimisation) and the map's polylines, staged into `dir`.
-void StageGridOutputs(const ShapeSlam& slam, const GridOutputs& what, const std::string& dir,
-                      io::StagedFiles& files, std::vector<std::string>& names) {
-  const auto stage = [&](const std::string& name, const std::string& content) {
-    files.Stage((std::filesystem::path(dir) / name).string(), content);
-    names.push_back(name);
-  };
+// (after the last pose-graph optimisation) and the map's polylines, each handed to
+// stage(name, content) as soon as it is rendered.
+template <typename Stage>
+void StageGridOutputs(const ShapeSlam& slam, const GridOutputs& what, const Stage& stage) {
   const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
   if (what.ros || what.gridmap) {
     std::vector<Polyline> walls;
@@ -391,7 +397,7 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
     stage("map.svg", io::RenderSvg(drawing));
     stage("map.png", io::RenderPng(drawing));
   }
-  StageGridOutputs(slam, grids, dir, files, names);
+  StageGridOutputs(slam, grids, stage);
   stage("scan_times.csv", FormatScanTimes(out));
   stage("stats.json", stats_json);
   files.Commit();
