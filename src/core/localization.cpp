@@ -72,7 +72,7 @@ void Take(const RefinementResult& refined, double fit, const ShapeSlamParams& pa
 
 // The fast track (with odometry, not in the paper; ShapeSlamParams::fast_track_min_fit): the
 // prediction alone, refined against the model; taken when the scan fits it by
-// min_fit before and after and the estimate stays near the prediction.
+// min_fit before and after and the estimate stays near the prediction. `loc` is set only then.
 bool FastTrack(const std::vector<Point2>& samples, const std::vector<Polyline>& model,
                const CandidateSelector& selector, const PosePrior& prior, double min_fit,
                const ShapeSlamParams& params, Localization& loc) {
@@ -270,10 +270,8 @@ Localization TrackKeyframe(const Shapes& shapes, const std::vector<Polyline>& ke
   if (samples.empty() || keyframe_fine.empty()) return loc;
   const CandidateSelector selector(keyframe_fine, SelectionFor(params));
   const PosePrior prior{Pose2(), OdometryCovariance(odometry_delta, params.odometry_noise)};
-  if (!FastTrack(samples, keyframe_fine, selector, prior, params.keyframe_track_min_fit, params, loc)) {
-    return Localization{};
-  }
-  return loc;
+  FastTrack(samples, keyframe_fine, selector, prior, params.keyframe_track_min_fit, params, loc);
+  return loc;  // FastTrack sets nothing when it falls short
 }
 
 }  // namespace shape_slam::internal

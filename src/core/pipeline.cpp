@@ -395,12 +395,13 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     return out;
   };
   internal::Localization loc;
+  std::vector<Polyline> recent_fine;  // made once: the keyframe track and Localize share it
   // A scan predicted short of the next keyframe first tries the last keyframe alone
   // (ShapeSlamParams::keyframe_track); the map's visible shape is then not needed.
   if (params_.keyframe_track_min_fit <= 1.0 && prediction.odometry_delta && !keyframes_.empty() &&
       !shapes.coarse.empty() && !IsKeyframe(prediction.T_map_robot)) {
-    loc = internal::TrackKeyframe(shapes, recent(places_.back().shapes.fine),
-                                  *prediction.odometry_delta, params_);
+    recent_fine = recent(places_.back().shapes.fine);
+    loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta, params_);
     report.keyframe_tracked = loc.fast_track;
   }
   std::vector<VisiblePolyline> visible;  // from the prediction
@@ -412,7 +413,8 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
     model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
     if (params_.use_last_keyframe && !keyframes_.empty()) {
       model.recent_coarse = recent(places_.back().shapes.coarse);
-      model.recent_fine = recent(places_.back().shapes.fine);
+      model.recent_fine = recent_fine.empty() ? recent(places_.back().shapes.fine)
+                                              : std::move(recent_fine);
     }
     std::optional<Pose2> velocity_hint;
     if (prediction.T_pred_robot_velocity) {
