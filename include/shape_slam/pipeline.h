@@ -34,10 +34,33 @@
 #include "shape_slam/window_search.h"
 
 namespace shape_slam {
+namespace internal {
+struct Localization;  // internal/localization.h
+}
 
 struct KeyframeParams {
   double min_translation_m = 0.20;  ///< metres since the last map update
   double min_rotation_rad = 0.15;   ///< radians since the last map update
+  void Validate() const;
+};
+
+/// Local tracking against submaps (Cartographer's split of local and global SLAM, made with
+/// polylines; not in the paper, whose single map is rebuilt by every loop closure). A submap is a
+/// polyline map (§5.2 merges inside it) in the local frame of the scan-to-submap tracking,
+/// built from `keyframes` consecutive keyframes. Two are active at a time: every keyframe goes
+/// into both; the older one (at least half full) is the model each scan is registered against,
+/// the newer one takes over when the older has its `keyframes` and is finished. A finished
+/// submap never changes. Loop closures only move pose-graph nodes: the local frame, the
+/// submaps and the scans' tracking are never rewritten, so one closure more or less cannot
+/// change what the next scans are matched against. The global map is made once, at Finish(),
+/// from the keyframes at their optimised poses.
+struct SubmapParams {
+  /// false: the earlier design, one global map rebuilt or deformed after loop closures (kept
+  /// for A/B comparison while the submap design is measured).
+  /// Continuing a loaded map (the ShapeSlam constructor that takes one) uses that design.
+  bool enabled = false;
+  /// Keyframes per submap (each keyframe is inserted into two submaps).
+  int keyframes = 40;
   void Validate() const;
 };
 
@@ -76,6 +99,7 @@ struct ShapeSlamParams {
   double coarse_gate_m = 0.6;
   MapUpdateParams map_update;        ///< §5.2
   KeyframeParams keyframe;
+  SubmapParams submaps;
   LoopClosureParams loop_closure;   ///< loop_closure.h
   OdometryNoiseParams odometry_noise;
   /// Also match each scan against the last keyframe scan's polylines (besides the visible map):
@@ -106,6 +130,13 @@ struct ShapeSlamParams {
   /// With odometry, an estimate farther than this many standard deviations (Mahalanobis, of
   /// the odometry noise model) from the prediction is rejected as a false match.
   double max_prior_mahalanobis = 4.0;
+  /// Odometry as a prior, not a gate (not in the paper): a scan that fits the model less than
+  /// this (fraction within matcher.inlier_distance_m) at the odometry's estimate is matched
+  /// again without the odometry, from the last pose (§4.3); that match wins when it fits at
+  /// least odometry_override_margin better. One odometry glitch (a heading jump) then costs one
+  /// extra search instead of a map turned by the glitch. 0: off.
+  double odometry_check_fit = 0.5;
+  double odometry_override_margin = 0.2;
   /// A scan whose pose no match confirmed still updates the map when less than this fraction
   /// of it lies within new_territory_distance_m (metres) of the visible map: new territory.
   double max_untrusted_coverage = 0.3;
@@ -184,6 +215,9 @@ struct ScanReport {
   bool fast_track = false;           ///< matched by the fast track (fast_track_min_fit)
   bool keyframe_tracked = false;     ///< matched by the keyframe track (keyframe_track_min_fit)
   bool used_odometry = false;        ///< the prediction used odometry
+  /// The odometry's prediction was overridden by a clearly better match without it
+  /// (ShapeSlamParams::odometry_check_fit).
+  bool odometry_overridden = false;
   int matched_pairs = 0;             ///< correspondences of eq. (4)
   int polylines = 0;                 ///< polylines extracted from the scan
   double inlier_ratio = 0.0;         ///< see ShapeMatchResult
@@ -220,12 +254,17 @@ class ShapeSlam {
   /// first keyframe.
   void Finish();
 
-  const PolylineMap& Map() const { return map_; }
+  /// The global map. With submaps it is made on demand from every keyframe at its optimised
+  /// pose (§5.2), and remade only after new keyframes or an optimisation.
+  const PolylineMap& Map() const;
   const ShapeSlamParams& Params() const { return params_; }
 
   /// The pose of every processed scan, corrected by the latest pose-graph optimisation (each
   /// scan rides on the keyframe it was localized from). This is the trajectory to report.
   std::vector<StampedPose> Trajectory() const;
+  /// The pose of every processed scan in the frame it was tracked in: with submaps the local
+  /// frame, which loop closures never change; without submaps the same as Trajectory().
+  std::vector<StampedPose> LocalTrajectory() const;
   /// The keyframe pose graph (nodes: keyframes in order; edges: consecutive and loop closures).
   const PoseGraph& Graph() const { return graph_; }
   /// Loop-closure edges accepted so far.
@@ -239,6 +278,17 @@ class ShapeSlam {
   /// Map deformations instead of a rebuild (LoopClosureParams::deform_max_shift_m).
   int NumMapDeformations() const { return num_deformations_; }
   long long NumKeyframesReinserted() const { return num_reinserted_; }
+  /// A submap (SubmapParams): polylines in the local tracking frame, from num_keyframes
+  /// keyframes in order from first_keyframe.
+  struct Submap {
+    PolylineMap map;
+    int first_keyframe = 0;
+    int num_keyframes = 0;
+  };
+  /// Submaps (SubmapParams): the finished ones (local tracking frame, never changed once
+  /// finished) and how many are active. Empty and 0 when submaps are off.
+  const std::vector<Submap>& FinishedSubmaps() const { return finished_submaps_; }
+  int NumActiveSubmaps() const { return static_cast<int>(active_submaps_.size()); }
   /// Whether the log's odometry was used (see OdometryStatus).
   const OdometryReport& Odometry() const { return odometry_; }
 
@@ -261,6 +311,7 @@ class ShapeSlam {
     LaserScan scan;                      // counter-clockwise beams
     bool trusted = false;                // its pose was confirmed by a match
     Pose2 T_map_robot_in_map;            // where the map holds its scan (inserted at this pose)
+    Pose2 T_local_robot;                 // its pose in the tracking frame (submaps: never moved)
   };
   // The map as it stood once the first `keyframes` keyframes were in it.
   struct MapCheckpoint {
@@ -272,15 +323,37 @@ class ShapeSlam {
     int keyframe = 0;
     Pose2 T_keyframe_robot;
   };
+  bool UseSubmaps() const { return params_.submaps.enabled; }
+  // The map each scan is registered against and its frame: the older active submap in the
+  // local frame, or the global map.
+  const PolylineMap& TrackingMap() const;
+  Pose2 TrackingPose(int keyframe) const;
+  // The global pose of a pose in the tracking frame (the latest keyframe's correction).
+  Pose2 GlobalPose(const Pose2& T_track_robot) const;
+  MapUpdateStats InsertIntoSubmaps(const std::vector<Polyline>& perceived,
+                                   const Pose2& T_local_sensor,
+                                   const std::vector<VisiblePolyline>& visible_front,
+                                   const LaserScan& scan, bool trusted);
   void TrackOdometry(const LaserScan& scan);
   Prediction Predict(const LaserScan& scan) const;
+  std::vector<Polyline> LastKeyframeIn(const std::vector<Polyline>& polylines,
+                                       const Pose2& T_map_sensor) const;
+  internal::Localization LocalizeAt(const ScanShapes& shapes, const LaserScan& scan,
+                                    const Pose2& T_map_sensor_pred,
+                                    const std::optional<Pose2>& odometry_delta,
+                                    const std::optional<Pose2>& velocity_hint,
+                                    std::vector<Polyline> recent_fine,
+                                    std::vector<VisiblePolyline>& visible) const;
+  void CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
+                     const Pose2& T_map_sensor_pred, const Pose2& T_map_sensor_last,
+                     internal::Localization& loc, std::vector<VisiblePolyline>& visible) const;
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
                                const Pose2& T_map_robot, bool trusted,
                                const Eigen::Matrix3d& covariance) const;
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
-                   const Pose2& T_map_robot, bool trusted, const Eigen::Matrix3d& covariance);
+                   const Pose2& T_track_robot, bool trusted, const Eigen::Matrix3d& covariance);
   void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                     const Eigen::Matrix3d& covariance);
   void OptimizeAndRebuild(bool at_end);
@@ -288,12 +361,19 @@ class ShapeSlam {
   void TagTouched(const MapUpdateStats& stats, int keyframe);
   void RebuildFrom(int first_moved);
   void CheckpointMap(int keyframes);
+  void BuildGlobalMap() const;
+  std::vector<StampedPose> AnchoredPoses(bool tracking_frame) const;
 
   ShapeSlamParams params_;
-  PolylineMap map_;
+  mutable PolylineMap map_;  // submaps: a cache made by Map()
+  // With submaps: the keyframes and optimisations map_ was made from (-1: never made).
+  mutable std::pair<int, int> map_made_from_{-1, -1};
+  int num_optimizations_ = 0;
   PolylineMap initial_map_;  // the map given to start from (empty when mapping from scratch)
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;
+  std::vector<Submap> active_submaps_;    // oldest first: the one scans are registered against
+  std::vector<Submap> finished_submaps_;  // never changed again
   std::vector<MapCheckpoint> checkpoints_;  // increasing keyframes
   int num_rebuilds_ = 0;
   int num_deformations_ = 0;

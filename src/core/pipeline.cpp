@@ -41,6 +41,10 @@ void KeyframeParams::Validate() const {
   NonNegative(min_rotation_rad, "KeyframeParams::min_rotation_rad");
 }
 
+void SubmapParams::Validate() const {
+  if (keyframes < 2) throw std::invalid_argument("SubmapParams::keyframes must be >= 2");
+}
+
 void OdometryNoiseParams::Validate() const {
   Positive(sigma_xy_m, "OdometryNoiseParams::sigma_xy_m");
   Positive(sigma_theta_rad, "OdometryNoiseParams::sigma_theta_rad");
@@ -57,6 +61,7 @@ void ShapeSlamParams::Validate() const {
   refinement.Validate();
   map_update.Validate();
   keyframe.Validate();
+  submaps.Validate();
   loop_closure.Validate();
   odometry_noise.Validate();
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
@@ -78,6 +83,10 @@ void ShapeSlamParams::Validate() const {
   NonNegative(motion_prior_weight, "ShapeSlamParams::motion_prior_weight");
   if (velocity_window < 1) throw std::invalid_argument("ShapeSlamParams::velocity_window must be >= 1");
   Positive(motion_prior_sigma_m, "ShapeSlamParams::motion_prior_sigma_m");
+  if (!(odometry_check_fit >= 0.0 && odometry_check_fit <= 1.0)) {
+    throw std::invalid_argument("ShapeSlamParams::odometry_check_fit must be in [0, 1]");
+  }
+  NonNegative(odometry_override_margin, "ShapeSlamParams::odometry_override_margin");
   Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
   if (!(max_lost_growth >= 1.0) || !std::isfinite(max_lost_growth)) {
     throw std::invalid_argument("ShapeSlamParams::max_lost_growth must be >= 1");
@@ -147,6 +156,8 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_m
       !std::isfinite(T_map_robot_first.theta)) {
     throw std::invalid_argument("ShapeSlam: the first robot pose is not finite");
   }
+  // A loaded map is continued with the single global map (submaps do not take one yet).
+  params_.submaps.enabled = false;
   initial_map_ = PolylineMap(params_.index_cell_size_m);
   for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
   map_ = initial_map_;
@@ -191,12 +202,59 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
 
 bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
   if (keyframes_.empty()) return true;
-  const Pose2 moved = KeyframePose(static_cast<int>(keyframes_.size()) - 1).Inverse() * T_map_robot;
+  const Pose2 moved = TrackingPose(static_cast<int>(keyframes_.size()) - 1).Inverse() * T_map_robot;
   return moved.Translation().norm() >= params_.keyframe.min_translation_m ||
          std::abs(moved.theta) >= params_.keyframe.min_rotation_rad;
 }
 
 Pose2 ShapeSlam::KeyframePose(int keyframe) const { return graph_.Node(places_[keyframe].node); }
+
+const PolylineMap& ShapeSlam::TrackingMap() const {
+  if (!UseSubmaps()) return map_;
+  static const PolylineMap kEmpty;
+  return active_submaps_.empty() ? kEmpty : active_submaps_.front().map;
+}
+
+Pose2 ShapeSlam::TrackingPose(int keyframe) const {
+  return UseSubmaps() ? keyframes_[keyframe].T_local_robot : KeyframePose(keyframe);
+}
+
+Pose2 ShapeSlam::GlobalPose(const Pose2& T_track_robot) const {
+  if (!UseSubmaps() || keyframes_.empty()) return T_track_robot;
+  const int last = static_cast<int>(keyframes_.size()) - 1;
+  return KeyframePose(last) * keyframes_[last].T_local_robot.Inverse() * T_track_robot;
+}
+
+// Every keyframe goes into each active submap (§5.2 inside it); the older one is the tracking
+// model and `visible_front` its visible shape at the keyframe. A new submap starts once the
+// newest holds half its keyframes; the older is finished, never to change, once full.
+MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceived,
+                                            const Pose2& T_local_sensor,
+                                            const std::vector<VisiblePolyline>& visible_front,
+                                            const LaserScan& scan, bool trusted) {
+  const int keyframe = static_cast<int>(keyframes_.size());
+  const int half = std::max(1, params_.submaps.keyframes / 2);
+  if (active_submaps_.empty() || active_submaps_.back().num_keyframes >= half) {
+    active_submaps_.push_back({PolylineMap(params_.index_cell_size_m), keyframe, 0});
+  }
+  MapUpdateStats front_stats;
+  for (std::size_t i = 0; i < active_submaps_.size(); ++i) {
+    Submap& submap = active_submaps_[i];
+    const bool front = i == 0;
+    std::vector<VisiblePolyline> visible =
+        front ? visible_front
+              : submap.map.Visible(T_local_sensor, VisibilityFor(scan, false, params_));
+    MapUpdateStats stats = UpdateMap(submap.map, perceived, T_local_sensor, visible, scan,
+                                     trusted || submap.map.Empty(), params_.map_update);
+    ++submap.num_keyframes;
+    if (front) front_stats = std::move(stats);
+  }
+  if (active_submaps_.front().num_keyframes >= params_.submaps.keyframes) {
+    finished_submaps_.push_back(std::move(active_submaps_.front()));
+    active_submaps_.erase(active_submaps_.begin());
+  }
+  return front_stats;
+}
 
 // The consecutive edge: the scan aligned to the previous keyframe alone, not to the map, so that
 // a pose corrected against older parts of the map enters the graph as a loop closure (found by
@@ -209,7 +267,7 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   const std::vector<Polyline>& prev_fine = places_[previous].shapes.fine;
   PoseGraphEdge edge;
   edge.from = places_[previous].node;
-  edge.T_from_to = KeyframePose(previous).Inverse() * T_map_robot;
+  edge.T_from_to = TrackingPose(previous).Inverse() * T_map_robot;
   // An unconfirmed step (odometry or nothing) is a weak constraint.
   edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
                             : UnconfirmedCovariance(params_.loop_closure);
@@ -230,17 +288,18 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
 
 // A new pose-graph node, tied to the previous keyframe.
 void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
-                            std::vector<Polyline> fine, const Pose2& T_map_robot, bool trusted,
-                            const Eigen::Matrix3d& covariance) {
+                            std::vector<Polyline> fine, const Pose2& T_track_robot,
+                            bool trusted, const Eigen::Matrix3d& covariance) {
   std::optional<PoseGraphEdge> edge;
-  if (!keyframes_.empty()) edge = SequentialEdge(fine, scan, T_map_robot, trusted, covariance);
+  if (!keyframes_.empty()) edge = SequentialEdge(fine, scan, T_track_robot, trusted, covariance);
+  const Pose2 T_map_robot = GlobalPose(T_track_robot);
   const int node = graph_.AddNode(T_map_robot);
   if (edge) {
     edge->to = node;
     graph_.AddEdge(*edge);
   }
   if (!initial_map_.Empty()) AddMapAnchor(node, T_map_robot, trusted, covariance);
-  keyframes_.push_back({scan, trusted, T_map_robot});
+  keyframes_.push_back({scan, trusted, T_map_robot, T_track_robot});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
 }
 
@@ -270,6 +329,8 @@ void ShapeSlam::AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
 void ShapeSlam::OptimizeAndRebuild(bool at_end) {
   const LoopClosureParams& lc = params_.loop_closure;
   graph_.Optimize(lc.graph);
+  ++num_optimizations_;
+  if (UseSubmaps() && !at_end) return;  // no map is rebuilt during mapping
   int first_moved = -1;
   double max_shift_m = 0.0, max_shift_rad = 0.0;
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
@@ -346,14 +407,19 @@ void ShapeSlam::RebuildFrom(int first_moved) {
 // rebuild_checkpoint_every keyframes.
 void ShapeSlam::CheckpointMap(int keyframes) {
   const int every = params_.loop_closure.rebuild_checkpoint_every;
-  if (every <= 0 || keyframes % every != 0 || deformed_from_ >= 0) return;
+  if (UseSubmaps() || every <= 0 || keyframes % every != 0 || deformed_from_ >= 0) return;
   if (!checkpoints_.empty() && checkpoints_.back().keyframes >= keyframes) return;
   checkpoints_.push_back({keyframes, map_.TakeSnapshot()});
 }
 
 void ShapeSlam::Finish() {
   const auto& edges = graph_.Edges();
-  if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
+  if (UseSubmaps()) {
+    if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
+      graph_.Optimize(params_.loop_closure.graph);
+      ++num_optimizations_;
+    }
+  } else if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
     OptimizeAndRebuild(/*at_end=*/true);
     if (!anchors_.empty()) {
       last_T_map_robot_ = KeyframePose(anchors_.back().keyframe) * anchors_.back().T_keyframe_robot;
@@ -362,13 +428,97 @@ void ShapeSlam::Finish() {
   std::vector<MapCheckpoint>().swap(checkpoints_);
 }
 
-std::vector<StampedPose> ShapeSlam::Trajectory() const {
+const PolylineMap& ShapeSlam::Map() const {
+  if (UseSubmaps()) {
+    const std::pair<int, int> now{static_cast<int>(keyframes_.size()), num_optimizations_};
+    if (map_made_from_ != now) BuildGlobalMap();
+    map_made_from_ = now;
+  }
+  return map_;
+}
+
+// With submaps: every keyframe inserted (§5.2) at its optimised pose into a new map.
+void ShapeSlam::BuildGlobalMap() const {
+  map_ = PolylineMap(params_.index_cell_size_m);
+  const ScanInsertionParams insertion = ToScanInsertionParams(params_);
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    const Keyframe& kf = keyframes_[k];
+    const Pose2 T_map_sensor = KeyframePose(static_cast<int>(k)) * kf.scan.T_robot_sensor;
+    InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor, kf.trusted || map_.Empty(),
+                     insertion);
+  }
+}
+
+std::vector<StampedPose> ShapeSlam::LocalTrajectory() const { return AnchoredPoses(true); }
+
+std::vector<StampedPose> ShapeSlam::Trajectory() const { return AnchoredPoses(false); }
+
+// Every scan at its keyframe's pose (tracking frame or optimised) times its offset from it.
+std::vector<StampedPose> ShapeSlam::AnchoredPoses(bool tracking_frame) const {
   std::vector<StampedPose> trajectory;
   trajectory.reserve(anchors_.size());
   for (const ScanAnchor& a : anchors_) {
-    trajectory.push_back({a.timestamp_s, KeyframePose(a.keyframe) * a.T_keyframe_robot});
+    const Pose2 T_keyframe = tracking_frame ? TrackingPose(a.keyframe) : KeyframePose(a.keyframe);
+    trajectory.push_back({a.timestamp_s, T_keyframe * a.T_keyframe_robot});
   }
   return trajectory;
+}
+
+// The last keyframe's polylines in the sensor frame T_map_sensor (tracking frame).
+std::vector<Polyline> ShapeSlam::LastKeyframeIn(const std::vector<Polyline>& polylines,
+                                                const Pose2& T_map_sensor) const {
+  const Pose2 T_sensor_keyframe = T_map_sensor.Inverse() *
+                                  TrackingPose(static_cast<int>(keyframes_.size()) - 1) *
+                                  places_.back().T_robot_sensor;
+  std::vector<Polyline> out;
+  out.reserve(polylines.size());
+  for (const Polyline& p : polylines) out.push_back(Transform(T_sensor_keyframe, p));
+  return out;
+}
+
+// Registers the scan against the tracking map seen from a predicted sensor pose (§3, §4.2-§4.3,
+// §5.1): its visible shape (returned in `visible`, prediction frame) and the last keyframe's
+// polylines (`recent_fine` when already made).
+internal::Localization ShapeSlam::LocalizeAt(const ScanShapes& shapes, const LaserScan& scan,
+                                             const Pose2& T_map_sensor_pred,
+                                             const std::optional<Pose2>& odometry_delta,
+                                             const std::optional<Pose2>& velocity_hint,
+                                             std::vector<Polyline> recent_fine,
+                                             std::vector<VisiblePolyline>& visible) const {
+  const VisibilityParams visibility = VisibilityFor(scan, !odometry_delta, params_);
+  visible = TrackingMap().Visible(T_map_sensor_pred, visibility);
+  internal::LocalModel model;
+  for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
+  model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
+  if (params_.use_last_keyframe && !keyframes_.empty()) {
+    model.recent_coarse = LastKeyframeIn(places_.back().shapes.coarse, T_map_sensor_pred);
+    model.recent_fine = recent_fine.empty()
+                            ? LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred)
+                            : std::move(recent_fine);
+  }
+  return internal::Localize(shapes, model, odometry_delta, velocity_hint, lost_scans_, params_);
+}
+
+// Odometry as a prior, not a gate (ShapeSlamParams::odometry_check_fit): a scan that the
+// odometry's prediction leaves poorly explained is matched again as if there were no odometry,
+// from the last pose (§4.3); a clearly better fit there wins over the odometry (a glitch, a
+// slip). `loc` and `visible` are then replaced, still relative to the odometry's prediction.
+void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
+                              const Pose2& T_map_sensor_pred, const Pose2& T_map_sensor_last,
+                              internal::Localization& loc,
+                              std::vector<VisiblePolyline>& visible) const {
+  std::vector<VisiblePolyline> visible_last;
+  internal::Localization alt =
+      LocalizeAt(shapes, scan, T_map_sensor_last, std::nullopt, std::nullopt, {}, visible_last);
+  if (!alt.trusted || alt.inlier_ratio < loc.inlier_ratio + params_.odometry_override_margin) {
+    return;
+  }
+  const Pose2 T_pred_last = T_map_sensor_pred.Inverse() * T_map_sensor_last;
+  alt.correction = T_pred_last * alt.correction;
+  alt.odometry_overridden = true;
+  loc = alt;
+  for (VisiblePolyline& v : visible_last) v.points_sensor = Transform(T_pred_last, v.points_sensor);
+  visible = std::move(visible_last);
 }
 
 ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
@@ -384,53 +534,42 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   odometry_.scans_predicted += report.used_odometry ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
 
-  // The last keyframe's polylines, in the sensor frame of the prediction.
-  const auto recent = [&](const std::vector<Polyline>& polylines) {
-    const Pose2 T_pred_keyframe = T_map_sensor_pred.Inverse() *
-                                  KeyframePose(static_cast<int>(keyframes_.size()) - 1) *
-                                  places_.back().T_robot_sensor;
-    std::vector<Polyline> out;
-    out.reserve(polylines.size());
-    for (const Polyline& p : polylines) out.push_back(Transform(T_pred_keyframe, p));
-    return out;
-  };
   internal::Localization loc;
   std::vector<Polyline> recent_fine;  // made once: the keyframe track and Localize share it
   // A scan predicted short of the next keyframe first tries the last keyframe alone
   // (ShapeSlamParams::keyframe_track); the map's visible shape is then not needed.
   if (params_.keyframe_track_min_fit <= 1.0 && prediction.odometry_delta && !keyframes_.empty() &&
       !shapes.coarse.empty() && !IsKeyframe(prediction.T_map_robot)) {
-    recent_fine = recent(places_.back().shapes.fine);
+    recent_fine = LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred);
     loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta, params_);
     report.keyframe_tracked = loc.fast_track;
   }
+  const PolylineMap& model_map = TrackingMap();
+  const bool model_empty = model_map.Empty();
   std::vector<VisiblePolyline> visible;  // from the prediction
-  if (!report.keyframe_tracked && !map_.Empty() && !shapes.coarse.empty()) {
-    const VisibilityParams visibility = VisibilityFor(scan, !prediction.odometry_delta, params_);
-    visible = map_.Visible(T_map_sensor_pred, visibility);
-    internal::LocalModel model;
-    for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
-    model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
-    if (params_.use_last_keyframe && !keyframes_.empty()) {
-      model.recent_coarse = recent(places_.back().shapes.coarse);
-      model.recent_fine = recent_fine.empty() ? recent(places_.back().shapes.fine)
-                                              : std::move(recent_fine);
-    }
+  if (!report.keyframe_tracked && !model_empty && !shapes.coarse.empty()) {
     std::optional<Pose2> velocity_hint;
     if (prediction.T_pred_robot_velocity) {
       velocity_hint = scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity *
                       scan.T_robot_sensor;
     }
-    loc = internal::Localize(shapes, model, prediction.odometry_delta, velocity_hint, lost_scans_,
-                             params_);
+    loc = LocalizeAt(shapes, scan, T_map_sensor_pred, prediction.odometry_delta, velocity_hint,
+                     std::move(recent_fine), visible);
+    if (prediction.odometry_delta && !loc.fast_track && last_T_map_robot_ &&
+        loc.inlier_ratio < params_.odometry_check_fit) {
+      CheckOdometry(shapes, scan, T_map_sensor_pred, *last_T_map_robot_ * scan.T_robot_sensor,
+                    loc, visible);
+      report.odometry_overridden = loc.odometry_overridden;
+    }
   }
+  // Poses in the tracking frame (the local frame with submaps, else the map's).
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
-  report.T_map_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
+  Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
   report.fast_track = loc.fast_track && !report.keyframe_tracked;
-  lost_scans_ = loc.trusted || map_.Empty() ? 0 : lost_scans_ + 1;
+  lost_scans_ = loc.trusted || model_empty ? 0 : lost_scans_ + 1;
   if (last_T_map_robot_) {
-    recent_motions_.push_back(last_T_map_robot_->Inverse() * report.T_map_robot);
+    recent_motions_.push_back(last_T_map_robot_->Inverse() * T_track_robot);
     if (static_cast<int>(recent_motions_.size()) > params_.velocity_window) {
       recent_motions_.erase(recent_motions_.begin());
     }
@@ -440,40 +579,47 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.inlier_ratio = loc.inlier_ratio;
   report.rms_error_m = loc.rms_error_m;
   if (last_T_map_robot_) {
-    travel_m_ += (last_T_map_robot_->Translation() - report.T_map_robot.Translation()).norm();
+    travel_m_ += (last_T_map_robot_->Translation() - T_track_robot.Translation()).norm();
   }
 
   // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
   // (new territory); elsewhere it would blur or duplicate what is there.
-  const bool may_update = loc.trusted || map_.Empty() ||
+  const bool may_update = loc.trusted || model_empty ||
                           loc.coverage < params_.max_untrusted_coverage;
-  if (!shapes.fine.empty() && may_update && IsKeyframe(report.T_map_robot)) {
+  if (!shapes.fine.empty() && may_update && IsKeyframe(T_track_robot)) {
     std::vector<Polyline> perceived_map;
     for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
     if (report.keyframe_tracked) {
-      visible = map_.Visible(T_map_sensor, VisibilityFor(scan, /*no_estimate=*/false, params_));
+      visible = model_map.Visible(T_map_sensor, VisibilityFor(scan, /*no_estimate=*/false, params_));
     } else {
       const Pose2 correction_inverse = loc.correction.Inverse();
       for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
     }
-    const bool trusted = loc.trusted || map_.Empty();
-    report.map_update =
-        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
-    TagTouched(report.map_update, static_cast<int>(keyframes_.size()));
+    const bool trusted = loc.trusted || model_empty;
+    if (UseSubmaps()) {
+      report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, trusted);
+    } else {
+      report.map_update =
+          UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
+      TagTouched(report.map_update, static_cast<int>(keyframes_.size()));
+    }
     report.keyframe = true;
-    AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), report.T_map_robot,
-                trusted, loc.covariance);
+    AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), T_track_robot, trusted,
+                loc.covariance);
     CheckpointMap(static_cast<int>(keyframes_.size()));
     if (loop_closer_.Update(places_, graph_)) {
       OptimizeAndRebuild(/*at_end=*/false);
-      report.T_map_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
+      // The global map was rebuilt around the corrected keyframe: track on from there. With
+      // submaps the local frame stays; only the keyframe's global pose moved.
+      if (!UseSubmaps()) T_track_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
     }
   }
   if (!keyframes_.empty()) {
     const int k = static_cast<int>(keyframes_.size()) - 1;
-    anchors_.push_back({scan.timestamp_s, k, KeyframePose(k).Inverse() * report.T_map_robot});
+    anchors_.push_back({scan.timestamp_s, k, TrackingPose(k).Inverse() * T_track_robot});
   }
-  last_T_map_robot_ = report.T_map_robot;
+  report.T_map_robot = GlobalPose(T_track_robot);
+  last_T_map_robot_ = T_track_robot;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;
 }

@@ -334,3 +334,139 @@ TEST(ToScanMatchParamsTest, MapperDefaultsGiveTheRegistrationDefaults) {
 
 }  // namespace
 }  // namespace shape_slam
+
+namespace shape_slam {
+namespace {
+
+ShapeSlamParams SubmapParamsWith(int keyframes_per_submap) {
+  ShapeSlamParams params;
+  params.submaps.enabled = true;
+  params.submaps.keyframes = keyframes_per_submap;
+  return params;
+}
+
+// The polylines of a map, point by point, to compare two states of it exactly.
+std::vector<std::vector<Point2>> Polylines(const PolylineMap& map) {
+  std::vector<std::vector<Point2>> out;
+  for (const PolylineId id : map.Ids()) out.push_back(map.Get(id).points);
+  return out;
+}
+
+// Submaps: bounded (each finished one holds exactly its keyframes, at most two active), finished
+// ones never change again, and the loop is still mapped right.
+TEST(PipelineSubmapTest, SubmapsAreBoundedAndFinishedOnesNeverChange) {
+  const SimRun run = Simulate(1);
+  ShapeSlam slam(SubmapParamsWith(20));
+  std::vector<std::vector<std::vector<Point2>>> finished_then;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    slam.Process(run.scans[i]);
+    EXPECT_LE(slam.NumActiveSubmaps(), 2);
+    if (i == run.scans.size() / 2) {
+      for (const auto& submap : slam.FinishedSubmaps()) finished_then.push_back(Polylines(submap.map));
+    }
+  }
+  ASSERT_GE(finished_then.size(), 2u);
+  ASSERT_GT(slam.FinishedSubmaps().size(), finished_then.size());
+  for (std::size_t s = 0; s < slam.FinishedSubmaps().size(); ++s) {
+    EXPECT_EQ(slam.FinishedSubmaps()[s].num_keyframes, 20);
+    EXPECT_EQ(slam.FinishedSubmaps()[s].first_keyframe, 10 * static_cast<int>(s));
+    if (s < finished_then.size()) {
+      EXPECT_EQ(Polylines(slam.FinishedSubmaps()[s].map), finished_then[s]) << "submap " << s;
+    }
+  }
+  ASSERT_GT(slam.NumLoopClosures(), 0);
+  slam.Finish();
+  EXPECT_LT(EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m, 0.05);
+  EXPECT_GT(slam.Map().NumPolylines(), 5u);
+  EXPECT_LT(slam.Map().NumVertices(), 400u);
+}
+
+// Loop closures move only the pose graph: the scans' tracking in the local frame is the same,
+// bit for bit, with and without them, while the closed trajectory is right and the open one
+// is not as good.
+TEST(PipelineSubmapTest, LoopClosuresNeverChangeTheLocalTrajectory) {
+  const SimRun run = Simulate(5);
+  ShapeSlamParams open = SubmapParamsWith(20);
+  open.loop_closure.enabled = false;
+  ShapeSlam closed_slam(SubmapParamsWith(20)), open_slam(open);
+  for (const LaserScan& scan : run.scans) {
+    closed_slam.Process(scan);
+    open_slam.Process(scan);
+  }
+  closed_slam.Finish();
+  open_slam.Finish();
+  ASSERT_GT(closed_slam.NumLoopClosures(), 0);
+  const auto closed_local = closed_slam.LocalTrajectory(), open_local = open_slam.LocalTrajectory();
+  ASSERT_EQ(closed_local.size(), open_local.size());
+  for (std::size_t i = 0; i < closed_local.size(); ++i) {
+    ASSERT_EQ(closed_local[i].pose.x, open_local[i].pose.x) << i;
+    ASSERT_EQ(closed_local[i].pose.y, open_local[i].pose.y) << i;
+    ASSERT_EQ(closed_local[i].pose.theta, open_local[i].pose.theta) << i;
+  }
+  const double closed_ate = EvaluateTrajectory(closed_slam.Trajectory(), run.truth, {}).ate_rmse_m;
+  const double open_ate = EvaluateTrajectory(open_slam.Trajectory(), run.truth, {}).ate_rmse_m;
+  EXPECT_LT(closed_ate, 0.05);
+  EXPECT_LT(closed_ate, open_ate);
+}
+
+// The run with one odometry step after scan `at` turned by `glitch_rad` (every later odometry
+// pose turns with it) and a wheel-base bias of `bias_rad_per_m`.
+SimRun WithOdometryFaults(SimRun run, std::size_t at, double glitch_rad, double bias_rad_per_m) {
+  Pose2 previous_raw = *run.scans[0].T_odom_robot, faulty = previous_raw;
+  for (std::size_t i = 1; i < run.scans.size(); ++i) {
+    const Pose2 raw = *run.scans[i].T_odom_robot;
+    Pose2 step = previous_raw.Inverse() * raw;
+    step.theta += bias_rad_per_m * step.Translation().norm();
+    if (i == at + 1) step = Pose2(step.x, step.y, step.theta + glitch_rad);
+    faulty = faulty * step;
+    previous_raw = raw;
+    run.scans[i].T_odom_robot = faulty;
+  }
+  return run;
+}
+
+struct FaultOutcome {
+  double ate_m = 0.0;
+  int overridden = 0;
+};
+
+FaultOutcome MapWithFaults(const SimRun& run, const ShapeSlamParams& params) {
+  ShapeSlam slam(params);
+  FaultOutcome outcome;
+  for (const LaserScan& scan : run.scans) outcome.overridden += slam.Process(scan).odometry_overridden;
+  slam.Finish();
+  outcome.ate_m = EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m;
+  return outcome;
+}
+
+// Odometry is a prior, not a gate: one 75 deg heading glitch is overridden by the scan match
+// and costs nothing; with the check off the glitch bends the map.
+TEST(PipelineSubmapTest, OdometryGlitchIsOverriddenByTheScans) {
+  const SimRun clean = Simulate(1);
+  const SimRun glitched = WithOdometryFaults(clean, clean.scans.size() / 3, 75.0 * M_PI / 180.0, 0.0);
+  const FaultOutcome with_check = MapWithFaults(glitched, SubmapParamsWith(20));
+  EXPECT_LT(with_check.ate_m, 0.05);
+  EXPECT_GE(with_check.overridden, 1);
+  ShapeSlamParams unchecked = SubmapParamsWith(20);
+  unchecked.odometry_check_fit = 0.0;
+  EXPECT_GT(MapWithFaults(glitched, unchecked).ate_m, 2.0 * with_check.ate_m);
+}
+
+// A wheel-base bias of 2 deg per metre on top of the simulated odometry's own drift.
+TEST(PipelineSubmapTest, BiasedOdometryIsCorrectedByTheScans) {
+  const SimRun clean = Simulate(2);
+  const SimRun biased = WithOdometryFaults(clean, 0, 0.0, 2.0 * M_PI / 180.0);
+  ASSERT_GT(OdometryAte(biased), 1.0);
+  EXPECT_LT(MapWithFaults(biased, SubmapParamsWith(20)).ate_m, 0.05);
+}
+
+TEST(PipelineSubmapTest, InvalidSubmapParamsAreRefused) {
+  ShapeSlamParams params = SubmapParamsWith(1);
+  EXPECT_THROW(ShapeSlam{params}, std::invalid_argument);
+  params = SubmapParamsWith(20);
+  params.odometry_check_fit = 1.5;
+  EXPECT_THROW(ShapeSlam{params}, std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace shape_slam

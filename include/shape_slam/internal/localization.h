@@ -57,6 +57,7 @@ struct Localization {
   /// without a trusted match (0 otherwise), the only case that reads it.
   double coverage = 0.0;
   bool fast_track = false;  ///< taken from the prediction without shape matching
+  bool odometry_overridden = false;  ///< matched without the odometry, which it contradicts
 };
 
 /// Candidates from shape matching against the map and against the last keyframe, the
