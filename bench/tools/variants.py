@@ -28,6 +28,9 @@ from atomic import write_text
 
 NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120", "odom-glitch", "odom-bad",
          "odom-bias"]
+# Variants that change the odometry alone: their ranges, timestamps and laser poses relative
+# to the odometry are the log's (the development logs' FLASER laser pose is their odometry pose).
+ODOMETRY_ONLY = ("zero-odom", "noisy-odom", "odom-glitch", "odom-bad", "odom-bias")
 
 NOISE_SEED = 20261201
 NOISE_TRANS_M_PER_SQRT_M = 0.05  # std of the translation noise (along and across) after 1 m
