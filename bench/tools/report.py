@@ -44,7 +44,8 @@ def write_csv(path, rows):
 MD_COLUMNS = [("log", "log"), ("method", "method"), ("completed", "done"), ("ate_m", "ATE m"),
               ("local_trans_m", "local m"), ("local_rot_deg", "local deg"),
               ("loop_trans_m", "revisit m"), ("loop_rot_deg", "revisit deg"),
-              ("gross", "gross local errors"), ("wall_s", "wall s"), ("per_scan_ms_median", "ms/scan median"),
+              ("gross", "gross local errors"), ("wall_s", "wall s"),
+              ("per_scan_ms_median", "ms/scan median"),
               ("per_scan_ms_mean", "ms/scan mean"),
               ("peak_rss_mb", "peak RSS MB"), ("map_bytes", "map on disk B"),
               ("map_memory_bytes", "map in memory B")]
