@@ -19,12 +19,17 @@ ArgParser MakeParser() {
       "datasets/radish/README.md: ATE = RMSE of positions after the best rigid 2D alignment;\n"
       "relation errors (Kümmerle et al. 2009) = mean absolute translation (m) and rotation (deg)\n"
       "of (x_t1^-1 (+) x_t2) (-) reference, for consecutive-scan relations (local) and the rest\n"
-      "(revisits). Poses are associated by timestamp.");
+      "(revisits). Poses are associated by timestamp. Gross local errors: the steps between\n"
+      "consecutive poses of TRAJ (both with a reference pose) whose motion is off the\n"
+      "reference's by more than --gross-m or --gross-deg: the tracking failures a mean hides.");
   parser.Positional("TRAJ", "estimated trajectory: TUM or 't x y theta' lines")
       .Positional("GT", "reference trajectory: TUM or 't x y theta' lines")
       .Positional("RELATIONS", "relations file 't1 t2 x y z roll pitch yaw'", false)
       .Option("--max-dt", {"S"}, "largest timestamp difference for associating poses, seconds",
               "0.001")
+      .Option("--gross-m", {"M"}, "gross local error: a step off by more than this, metres", "0.5")
+      .Option("--gross-deg", {"DEG"}, "gross local error: a step off by more than this, degrees",
+              "10")
       .Flag("--json", "print one JSON object");
   return parser;
 }
@@ -42,11 +47,13 @@ std::string Json(const EvaluationResult& r) {
   json.Key("ate_m").Value(r.ate_rmse_m).Key("ate_max_m").Value(r.ate_max_m);
   RelationJson(json, "local", r.local);
   RelationJson(json, "revisit", r.revisit);
+  json.Key("gross_local").BeginObject().Key("count").Value(r.gross_local.count);
+  json.Key("steps").Value(r.gross_local.steps).EndObject();
   json.EndObject();
   return json.str() + "\n";
 }
 
-std::string Text(const EvaluationResult& r, bool have_relations) {
+std::string Text(const EvaluationResult& r, bool have_relations, const EvaluationParams& params) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(4) << "poses matched   " << r.matched_poses << " of "
       << r.reference_poses << " reference poses\n"
@@ -60,6 +67,9 @@ std::string Text(const EvaluationResult& r, bool have_relations) {
     line("local relations ", r.local);
     line("revisit rel.    ", r.revisit);
   }
+  out << std::defaultfloat << "gross local err " << r.gross_local.count << " of "
+      << r.gross_local.steps << " steps (off by > " << params.gross_translation_m << " m or > "
+      << params.gross_rotation_deg << " deg)\n";
   return out.str();
 }
 
@@ -74,6 +84,10 @@ int RunEval(const Args& args) {
   EvaluationParams params;
   params.max_time_difference_s = parser.GetDouble("--max-dt", params.max_time_difference_s);
   if (params.max_time_difference_s < 0) throw UsageError("--max-dt must be >= 0");
+  params.gross_translation_m = parser.GetDouble("--gross-m", params.gross_translation_m);
+  params.gross_rotation_deg = parser.GetDouble("--gross-deg", params.gross_rotation_deg);
+  if (!(params.gross_translation_m >= 0)) throw UsageError("--gross-m must be >= 0");
+  if (!(params.gross_rotation_deg >= 0)) throw UsageError("--gross-deg must be >= 0");
   const std::vector<StampedPose> estimate = io::ReadTrajectory(parser.Get("TRAJ"));
   const std::vector<StampedPose> reference = io::ReadTrajectory(parser.Get("GT"));
   std::vector<Relation> relations;
@@ -86,7 +100,7 @@ int RunEval(const Args& args) {
               << " reference poses were associated with the trajectory (timestamps within "
               << params.max_time_difference_s << " s): the figures cover only those\n";
   }
-  std::cout << (parser.Has("--json") ? Json(result) : Text(result, !relations.empty()));
+  std::cout << (parser.Has("--json") ? Json(result) : Text(result, !relations.empty(), params));
   return 0;
 }
 

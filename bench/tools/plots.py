@@ -3,6 +3,7 @@
 Needs matplotlib (Debian package python3-matplotlib). Files are written atomically."""
 import math
 import os
+import statistics
 
 import matplotlib
 
@@ -60,22 +61,33 @@ PANELS = [("ate_m", "ATE (m)"), ("local_trans_m", "local relation error (m)"),
           ("loop_trans_m", "revisit relation error (m)"), ("wall_s", "wall time (s)")]
 
 
+def _values(rows, log, method, key):
+    """The finite, positive values of key over the runs of a log and method (its copies)."""
+    return [v for r in rows if r["log"] == log and r["method"] == method
+            and (v := r.get(key)) is not None and math.isfinite(v) and v > 0]
+
+
 def _bar_panel(ax, rows, logs, methods, key, title):
+    """A bar per log and method at the median over its runs, whiskers at min and max when
+    there are several (perturbed copies)."""
     width = 0.8 / max(1, len(methods))
     values = [v for r in rows if (v := r.get(key)) is not None and v > 0]
     floor = min(values) / 3 if values else 0.01
     labelled = set()
     for m, method in enumerate(methods):
         for l, log in enumerate(logs):
-            row = next((r for r in rows if r["log"] == log and r["method"] == method), None)
-            value = row.get(key) if row else None
+            runs = _values(rows, log, method, key)
             x = l - 0.4 + width * (m + 0.5)
-            if value is None or not math.isfinite(value) or value <= 0:
+            if not runs:
                 ax.text(x, floor * 1.1, "x", ha="center", va="bottom", fontsize=7, color="gray")
                 continue
+            value = statistics.median(runs)
             ax.bar(x, value, width, color=COLORS[m % len(COLORS)],
                    label=None if method in labelled else method)
-            ax.text(x, value * 1.08, f"{value:.3g}", ha="center", va="bottom", fontsize=6,
+            if len(runs) > 1:
+                ax.errorbar(x, value, yerr=[[value - min(runs)], [max(runs) - value]], fmt="none",
+                            ecolor="black", elinewidth=0.7, capsize=1.5)
+            ax.text(x, max(runs) * 1.08, f"{value:.3g}", ha="center", va="bottom", fontsize=6,
                     rotation=90)
             labelled.add(method)
     ax.set_yscale("log")
@@ -98,7 +110,8 @@ def comparison_plot(path, rows, logs, methods):
                 handles.append(h)
                 labels.append(lab)
     fig.legend(handles, labels, loc="upper center", ncol=len(labels), fontsize=9)
-    fig.text(0.5, 0.005, "log scale; x = not completed, not run or no reference", ha="center",
+    fig.text(0.5, 0.005, "log scale; x = not completed, not run or no reference; with several "
+             "runs (perturbed copies): bar at the median, whiskers at min and max", ha="center",
              fontsize=8, color="gray")
     fig.tight_layout(rect=(0, 0.02, 1, 0.94))
     _save(fig, path)

@@ -8,6 +8,14 @@ consistently (bench/README.md, "Variants").
   half-beams  every 2nd beam (FLASER n -> n/2 readings, the same 180 deg field of view)
   fov120      only the beams within the central 120 deg, written as ROBOTLASER1 records
               (FLASER cannot say a field of view other than 180 deg)
+  odom-glitch one scan step, somewhere in the middle third of the log, whose odometry heading
+              jumps by 60-90 deg (seeded)
+  odom-bad    every scan step's odometry with 5 deg (heading) and 5 cm (along, across) of
+              Gaussian noise (seeded)
+  odom-bias   a wheel-base error: 1 deg of heading per metre travelled
+
+Perturbed copies (perturbed_copy): 2 mm of Gaussian noise on every valid range (not on
+no-return or invalid readings), seeded by the copy index; reference files unchanged.
 
 Reference poses: those of the scans kept. Relations: those whose two timestamps are both kept;
 for every2 the consecutive-scan relations of the kept scans are the composition of the two
@@ -18,13 +26,25 @@ import random
 import carmen
 from atomic import write_text
 
-NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120"]
+NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120", "odom-glitch", "odom-bad",
+         "odom-bias"]
+# Variants that change the odometry alone: their ranges, timestamps and laser poses relative
+# to the odometry are the log's (the development logs' FLASER laser pose is their odometry pose).
+ODOMETRY_ONLY = ("zero-odom", "noisy-odom", "odom-glitch", "odom-bad", "odom-bias")
 
 NOISE_SEED = 20261201
 NOISE_TRANS_M_PER_SQRT_M = 0.05  # std of the translation noise (along and across) after 1 m
 NOISE_ROT_DEG_PER_SQRT_M = 2.0  # std of the heading noise after 1 m of travel
 NOISE_ROT_DEG_PER_SQRT_RAD = 2.0  # std of the heading noise after turning 1 rad
 FOV_DEG = 120.0
+GLITCH_SEED = 20261202
+GLITCH_DEG = (60.0, 90.0)  # size of the heading jump (either sign)
+BAD_ODOM_SEED = 20261203
+BAD_ODOM_ROT_DEG = 5.0  # std of the heading noise of every scan step
+BAD_ODOM_TRANS_M = 0.05  # std of the translation noise (along and across) of every scan step
+BIAS_DEG_PER_M = 1.0  # heading error per metre travelled
+RANGE_NOISE_M = 0.002  # std of the noise on each valid range of a perturbed copy
+RANGE_DECIMALS = 4  # ranges of a perturbed copy are written to 0.1 mm
 
 
 class VariantError(Exception):
@@ -112,13 +132,12 @@ def _noisy_increment(rng, d):
             d[2] + rng.gauss(0.0, sigma_r))
 
 
-def noisy_odom(records):
+def _rewrite_odometry(records, fault):
     """Every odometry pose (ODOM x y theta, FLASER odom_x..) in file order is one step of the
-    odometry; each increment gets Gaussian noise whose variance grows linearly with the distance
-    and the turn (a random walk: the same drift whatever the record rate). The FLASER laser pose
-    keeps its offset from the odometry pose."""
-    rng = random.Random(NOISE_SEED)
-    out, raw_prev, noisy_prev = [], None, None
+    odometry; each increment d becomes fault(d, is_scan) (is_scan: the increment ends at a
+    FLASER record, i.e. one per scan step) and the poses are composed again from the first. The
+    FLASER laser pose keeps its offset from the odometry pose."""
+    out, raw_prev, faulty_prev = [], None, None
     for f in records:
         if not f or f[0] not in ("ODOM", "FLASER"):
             out.append(f)
@@ -126,18 +145,63 @@ def noisy_odom(records):
         f = list(f)
         odom_slot = _pose_slots(f)[-1]
         raw = tuple(float(f[i]) for i in odom_slot)
-        noisy = raw if raw_prev is None else compose(
-            noisy_prev, _noisy_increment(rng, between(raw_prev, raw)))
+        faulty = raw if raw_prev is None else compose(
+            faulty_prev, fault(between(raw_prev, raw), f[0] == "FLASER"))
         if f[0] == "FLASER":
             laser_slot = _pose_slots(f)[0]
             laser = tuple(float(f[i]) for i in laser_slot)
-            for i, v in zip(laser_slot, compose(noisy, between(raw, laser))):
+            for i, v in zip(laser_slot, compose(faulty, between(raw, laser))):
                 f[i] = fmt(v)
-        for i, v in zip(odom_slot, noisy):
+        for i, v in zip(odom_slot, faulty):
             f[i] = fmt(v)
-        raw_prev, noisy_prev = raw, noisy
+        raw_prev, faulty_prev = raw, faulty
         out.append(f)
     return out
+
+
+def noisy_odom(records):
+    """Each odometry increment gets Gaussian noise whose variance grows linearly with the
+    distance and the turn (a random walk: the same drift whatever the record rate)."""
+    rng = random.Random(NOISE_SEED)
+    return _rewrite_odometry(records, lambda d, _: _noisy_increment(rng, d))
+
+
+def odom_glitch(records):
+    """One scan step, drawn in the middle third of the scans, whose heading jumps by
+    GLITCH_DEG (either sign); the odometry after it is turned with it."""
+    rng = random.Random(GLITCH_SEED)
+    scans = sum(1 for f in records if f and f[0] == "FLASER")
+    at = rng.randrange(scans // 3, max(2 * scans // 3, scans // 3 + 1))
+    jump = math.radians(rng.uniform(*GLITCH_DEG)) * rng.choice((-1.0, 1.0))
+    step = [0]
+
+    def fault(d, is_scan):
+        if not is_scan:
+            return d
+        step[0] += 1
+        return (d[0], d[1], d[2] + jump) if step[0] == at else d
+    return _rewrite_odometry(records, fault)
+
+
+def odom_bad(records):
+    """Every scan step's increment with BAD_ODOM_TRANS_M (along, across) and BAD_ODOM_ROT_DEG
+    (heading) of Gaussian noise, whatever the distance travelled."""
+    rng = random.Random(BAD_ODOM_SEED)
+    sigma_r = math.radians(BAD_ODOM_ROT_DEG)
+
+    def fault(d, is_scan):
+        if not is_scan:
+            return d
+        return (d[0] + rng.gauss(0.0, BAD_ODOM_TRANS_M), d[1] + rng.gauss(0.0, BAD_ODOM_TRANS_M),
+                d[2] + rng.gauss(0.0, sigma_r))
+    return _rewrite_odometry(records, fault)
+
+
+def odom_bias(records):
+    """A wheel-base error: every increment turns BIAS_DEG_PER_M more per metre travelled."""
+    per_m = math.radians(BIAS_DEG_PER_M)
+    return _rewrite_odometry(
+        records, lambda d, _: (d[0], d[1], d[2] + per_m * math.hypot(d[0], d[1])))
 
 
 def half_beams(records):
@@ -238,8 +302,11 @@ def write_variant(name, log_path, gt_path, relations_path, out_stem):
         out = noisy_odom(records)
     elif name == "half-beams":
         out = half_beams(records)
-    else:
+    elif name == "fov120":
         out = fov120(records, carmen.max_range_m(log_path))
+    else:
+        out = {"odom-glitch": odom_glitch, "odom-bad": odom_bad, "odom-bias": odom_bias}[name](
+            records)
     log_out = out_stem + ".log"
     write_text(log_out, "".join(" ".join(f) + "\n" for f in out))
     all_stamps, kept = carmen.scan_stamps(log_path), carmen.scan_stamps(log_out)
@@ -251,3 +318,48 @@ def write_variant(name, log_path, gt_path, relations_path, out_stem):
         else:
             carmen.write_subset_by_stamps(relations_path, out_stem + ".relations", kept, 2)
     return log_out
+
+
+# --- perturbed copies -------------------------------------------------------------------------
+
+def _noisy_ranges(ranges, max_range_m, rng):
+    """RANGE_NOISE_M of Gaussian noise on each valid range (finite, > 0, < max_range_m); a noisy
+    range stays valid (> 0, < max_range_m), the others are written unchanged."""
+    out = []
+    for text in ranges:
+        r = float(text)
+        if not (math.isfinite(r) and 0.0 < r < max_range_m):
+            out.append(text)
+            continue
+        noisy = r + rng.gauss(0.0, RANGE_NOISE_M)
+        low, high = 10.0 ** -RANGE_DECIMALS, max_range_m - 10.0 ** -RANGE_DECIMALS
+        out.append(f"{min(max(noisy, low), high):.{RANGE_DECIMALS}f}")
+    return out
+
+
+def perturb_ranges(records, flaser_max_range_m, seed):
+    """The records with noisy valid ranges (FLASER: below the log's no-return value by
+    shape-slam's reader rule; ROBOTLASER1: below its own max range field)."""
+    rng = random.Random(seed)
+    out = []
+    for f in records:
+        if f and f[0] == "FLASER":
+            n = _flaser_n(f)
+            f = [*f[:2], *_noisy_ranges(f[2:2 + n], flaser_max_range_m, rng), *f[2 + n:]]
+        elif f and f[0] == "ROBOTLASER1":
+            n = int(f[8])
+            f = [*f[:9], *_noisy_ranges(f[9:9 + n], float(f[5]), rng), *f[9 + n:]]
+        out.append(f)
+    return out
+
+
+def perturbed_copy(log_path, out_path, copy_index):
+    """Writes a copy of a CARMEN log with 2 mm of noise on its valid ranges, seeded by
+    copy_index (copy 0 is noisy too). Timestamps, odometry and record order are kept, so the
+    source's reference poses and relations apply unchanged. Returns out_path."""
+    records = _records(log_path)
+    if not any(f and f[0] in ("FLASER", "ROBOTLASER1") for f in records):
+        raise VariantError(f"{log_path}: no FLASER or ROBOTLASER1 record")
+    out = perturb_ranges(records, carmen.max_range_m(log_path), copy_index)
+    write_text(out_path, "".join(" ".join(f) + "\n" for f in out))
+    return out_path

@@ -27,6 +27,11 @@ struct Relation {
 struct EvaluationParams {
   /// Poses are associated by timestamp when they differ by at most this, seconds.
   double max_time_difference_s = 1e-3;
+  /// A step between consecutive poses is a gross local error when its motion differs from the
+  /// reference's by more than this translation, metres ...
+  double gross_translation_m = 0.5;
+  /// ... or by more than this rotation, degrees.
+  double gross_rotation_deg = 10.0;
   void Validate() const;
 };
 
@@ -37,6 +42,13 @@ struct RelationErrors {
   double mean_rotation_deg = 0;   ///< mean absolute rotation error
 };
 
+/// Tracking failures that a mean hides: steps between consecutive estimate poses (both with a
+/// reference pose) whose motion is off the reference motion by more than the thresholds.
+struct GrossLocalErrors {
+  std::size_t steps = 0;  ///< consecutive estimate pose pairs that both have a reference pose
+  std::size_t count = 0;  ///< of those, the steps off by > gross_translation_m or _rotation_deg
+};
+
 struct EvaluationResult {
   std::size_t matched_poses = 0;  ///< estimate poses associated with a reference pose
   std::size_t reference_poses = 0;
@@ -45,6 +57,7 @@ struct EvaluationResult {
   Pose2 T_reference_estimate;     ///< that alignment
   RelationErrors local;           ///< t2 is the reference pose right after t1
   RelationErrors revisit;         ///< all other relations
+  GrossLocalErrors gross_local;   ///< consecutive estimate poses, against the reference poses
 };
 
 /// Best rigid transform (no scale) mapping `from` onto `to` in the least-squares sense.

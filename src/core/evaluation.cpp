@@ -43,11 +43,64 @@ void FinishMeans(RelationErrors& errors) {
   errors.mean_rotation_deg /= static_cast<double>(errors.count);
 }
 
+// Kümmerle relation errors, split into consecutive-scan relations and revisits.
+void AddRelations(const std::vector<StampedPose>& est, const std::vector<StampedPose>& ref,
+                  const std::vector<Relation>& relations, const EvaluationParams& params,
+                  EvaluationResult& result) {
+  for (const Relation& relation : relations) {
+    const auto i1 = FindByTime(est, relation.t1_s, params.max_time_difference_s);
+    const auto i2 = FindByTime(est, relation.t2_s, params.max_time_difference_s);
+    const auto r1 = FindByTime(ref, relation.t1_s, params.max_time_difference_s);
+    const auto r2 = FindByTime(ref, relation.t2_s, params.max_time_difference_s);
+    const bool local = r1 && r2 && *r2 == *r1 + 1;
+    RelationErrors& errors = local ? result.local : result.revisit;
+    if (!i1 || !i2) {
+      ++errors.missing;
+      continue;
+    }
+    // e = (x_t1^-1 (+) x_t2) (-) reference
+    const Pose2 estimated = est[*i1].pose.Inverse() * est[*i2].pose;
+    AddRelationError(relation.T_1_2.Inverse() * estimated, errors);
+  }
+  FinishMeans(result.local);
+  FinishMeans(result.revisit);
+}
+
+// Each step between consecutive estimate poses that both have a reference pose, against the
+// reference's motion between those two reference poses.
+GrossLocalErrors CountGrossLocalErrors(const std::vector<StampedPose>& est,
+                                       const std::vector<StampedPose>& ref,
+                                       const EvaluationParams& params) {
+  GrossLocalErrors gross;
+  const double max_rotation_rad = params.gross_rotation_deg * M_PI / 180.0;
+  std::optional<std::size_t> previous;  // reference pose of est[i - 1]
+  for (std::size_t i = 0; i < est.size(); ++i) {
+    const auto r = FindByTime(ref, est[i].timestamp_s, params.max_time_difference_s);
+    if (r && previous) {
+      const Pose2 estimated = est[i - 1].pose.Inverse() * est[i].pose;
+      const Pose2 error = (ref[*previous].pose.Inverse() * ref[*r].pose).Inverse() * estimated;
+      ++gross.steps;
+      if (error.Translation().norm() > params.gross_translation_m ||
+          std::abs(error.theta) > max_rotation_rad) {
+        ++gross.count;
+      }
+    }
+    previous = r;
+  }
+  return gross;
+}
+
 }  // namespace
 
 void EvaluationParams::Validate() const {
   if (!(max_time_difference_s >= 0.0) || !std::isfinite(max_time_difference_s)) {
     throw std::invalid_argument("EvaluationParams::max_time_difference_s must be >= 0");
+  }
+  if (!(gross_translation_m >= 0.0) || !std::isfinite(gross_translation_m)) {
+    throw std::invalid_argument("EvaluationParams::gross_translation_m must be >= 0");
+  }
+  if (!(gross_rotation_deg >= 0.0) || !std::isfinite(gross_rotation_deg)) {
+    throw std::invalid_argument("EvaluationParams::gross_rotation_deg must be >= 0");
   }
 }
 
@@ -99,23 +152,8 @@ EvaluationResult EvaluateTrajectory(const std::vector<StampedPose>& estimate,
   }
   result.ate_rmse_m = std::sqrt(sum / static_cast<double>(from.size()));
 
-  for (const Relation& relation : relations) {
-    const auto i1 = FindByTime(est, relation.t1_s, params.max_time_difference_s);
-    const auto i2 = FindByTime(est, relation.t2_s, params.max_time_difference_s);
-    const auto r1 = FindByTime(ref, relation.t1_s, params.max_time_difference_s);
-    const auto r2 = FindByTime(ref, relation.t2_s, params.max_time_difference_s);
-    const bool local = r1 && r2 && *r2 == *r1 + 1;
-    RelationErrors& errors = local ? result.local : result.revisit;
-    if (!i1 || !i2) {
-      ++errors.missing;
-      continue;
-    }
-    // e = (x_t1^-1 (+) x_t2) (-) reference
-    const Pose2 estimated = est[*i1].pose.Inverse() * est[*i2].pose;
-    AddRelationError(relation.T_1_2.Inverse() * estimated, errors);
-  }
-  FinishMeans(result.local);
-  FinishMeans(result.revisit);
+  AddRelations(est, ref, relations, params, result);
+  result.gross_local = CountGrossLocalErrors(est, ref, params);
   return result;
 }
 

@@ -67,6 +67,16 @@ for bad in -1 0 abc nan; do
     --grid-resolution "$bad"
 done
 expect 0 "ATE \(RMSE\) +0\.0+ m" -- "$BIN" eval "$WORK/head/trajectory.tum" "$WORK/head/trajectory.tum"
+# Gross local errors: a 1 m slide after the first pose is one step off by more than 0.5 m.
+expect 0 "gross local err 0 of [1-9][0-9]* steps \(off by > 0\.5 m or > 10 deg\)" -- \
+  "$BIN" eval "$WORK/head/trajectory.tum" "$WORK/head/trajectory.tum"
+awk '!/^#/ && n++ > 0 { $2 += 1.0 } { print }' "$WORK/head/trajectory.tum" >"$WORK/slide.tum"
+expect 0 '"gross_local":\{"count":1,"steps":[1-9]' -- \
+  "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --json
+expect 0 '"gross_local":\{"count":0,' -- \
+  "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --json --gross-m 1.5
+expect 2 "gross-deg must be >= 0" -- \
+  "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --gross-deg -1
 
 # The demo: the MRPT sample log, default output names, a sane map.
 if [ -f "$SENA" ]; then

@@ -70,6 +70,73 @@ TEST(EvaluationTest, AssociatesByTimestampWithinTolerance) {
   EXPECT_THROW(EvaluateTrajectory({{7.0, Pose2()}}, reference, {}), std::invalid_argument);
 }
 
+// The reference's own steps, each followed by `error_of(step)` in the moving frame.
+template <typename ErrorOf>
+std::vector<StampedPose> WithStepErrors(const std::vector<StampedPose>& reference,
+                                        ErrorOf error_of) {
+  std::vector<StampedPose> estimate = {reference[0]};
+  for (std::size_t i = 1; i < reference.size(); ++i) {
+    const Pose2 step = reference[i - 1].pose.Inverse() * reference[i].pose;
+    estimate.push_back({reference[i].timestamp_s, estimate.back().pose * step * error_of(i)});
+  }
+  return estimate;
+}
+
+TEST(EvaluationTest, CountsInjectedGrossLocalErrors) {
+  const std::vector<StampedPose> reference = Spiral(40);
+  // Gross: a 0.8 m slide at step 5, a 0.6 m sideways slide at 12, a 15 deg heading jump at 20,
+  // a -11 deg jump at 33. Not gross: 0.45 m at 8, 9 deg at 27, (0.3 m, 5 deg) at 30.
+  const auto error_of = [](std::size_t step) {
+    const double deg = M_PI / 180.0;
+    switch (step) {
+      case 5: return Pose2(0.8, 0.0, 0.0);
+      case 12: return Pose2(0.0, 0.6, 0.0);
+      case 20: return Pose2(0.0, 0.0, 15 * deg);
+      case 33: return Pose2(0.0, 0.0, -11 * deg);
+      case 8: return Pose2(0.45, 0.0, 0.0);
+      case 27: return Pose2(0.0, 0.0, 9 * deg);
+      case 30: return Pose2(0.3, 0.0, 5 * deg);
+      default: return Pose2();
+    }
+  };
+  const std::vector<StampedPose> estimate = WithStepErrors(reference, error_of);
+  const EvaluationResult r = EvaluateTrajectory(estimate, reference, {});
+  EXPECT_EQ(r.gross_local.steps, 39u);
+  EXPECT_EQ(r.gross_local.count, 4u);
+  // The thresholds are parameters: above 0.7 m and 12 deg, only the slide and the 15 deg jump.
+  EvaluationParams strict;
+  strict.gross_translation_m = 0.7;
+  strict.gross_rotation_deg = 12.0;
+  EXPECT_EQ(EvaluateTrajectory(estimate, reference, {}, strict).gross_local.count, 2u);
+  EvaluationParams loose;
+  loose.gross_translation_m = 0.25;
+  loose.gross_rotation_deg = 8.0;
+  EXPECT_EQ(EvaluateTrajectory(estimate, reference, {}, loose).gross_local.count, 7u);
+}
+
+TEST(EvaluationTest, GrossLocalErrorsSkipStepsWithoutReference) {
+  const std::vector<StampedPose> reference = Spiral(10);
+  std::vector<StampedPose> estimate = WithStepErrors(
+      reference, [](std::size_t step) { return step == 4 ? Pose2(1.0, 0, 0) : Pose2(); });
+  // Pose 4 has no reference pose: steps 3->4 and 4->5 are not counted, the jump goes unseen.
+  estimate[4].timestamp_s += 0.5;
+  const EvaluationResult r = EvaluateTrajectory(estimate, reference, {});
+  EXPECT_EQ(r.gross_local.steps, 7u);
+  EXPECT_EQ(r.gross_local.count, 0u);
+  // The same jump between two poses that both have a reference pose is counted.
+  estimate[4].timestamp_s -= 0.5;
+  EXPECT_EQ(EvaluateTrajectory(estimate, reference, {}).gross_local.count, 1u);
+}
+
+TEST(EvaluationTest, GrossThresholdsAreValidated) {
+  EvaluationParams params;
+  params.gross_rotation_deg = -1.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = {};
+  params.gross_translation_m = std::nan("");
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
 TEST(EvaluationTest, BestRigidAlignmentRecoversRandomMotions) {
   std::mt19937 prng(42);
   std::uniform_real_distribution<double> u(-10.0, 10.0);
