@@ -80,7 +80,7 @@ def _numbers(path, columns, what):
     rows = []
     with open(path) as f:
         for number, line in enumerate(f, 1):
-            if not line.strip() or line.lstrip().startswith("%"):
+            if not line.strip() or line.lstrip().startswith(("%", "#")):
                 continue
             fields = line.split()
             if len(fields) < columns:
@@ -171,3 +171,19 @@ def graphslam_keyframes(stdout_path, graph_path, odometry):
         node_scans.append(scan)
         since = (0.0, 0.0, 0.0)
     return [(s, compose(origin, vertices[k])) for k, s in enumerate(node_scans)]
+
+
+# --- bench/graphslam_lc (graphslam's CLoopCloserERD over the library class) -------------------
+
+def graphslam_lc_keyframes(nodes_path, stamps, odometry):
+    """[(scan, pose)] of bench/graphslam_lc's nodes file (`node scan timestamp x y phi`, the
+    scan at which each node was registered), checked against the scans' timestamps."""
+    rows = _numbers(nodes_path, 6, "'node scan timestamp x y phi'")
+    keyframes = []
+    for node, scan, t, x, y, phi in rows:
+        scan = int(scan)
+        if not 0 <= scan < len(stamps) or abs(stamps[scan] - t) > STAMP_TOLERANCE_S:
+            raise PeerOutputError(f"node {int(node)}: scan {scan} at t={t} is not a scan of "
+                                  "the log")
+        keyframes.append((scan, compose(odometry[0], (x, y, phi))))
+    return sorted(keyframes, key=lambda k: k[0])
