@@ -117,6 +117,12 @@ int main(int argc, char** argv) {
     std::cerr << usage;
     return 2;
   }
+  for (const char* path : {argv[1], argv[2]}) {
+    if (!std::filesystem::is_regular_file(path)) {
+      std::cerr << "graphslam_lc: error: no such file: " << path << "\n";
+      return 2;
+    }
+  }
   try {
     const auto edge_reg = shape_slam::bench::MakeLoopCloser();
     auto node_reg = std::make_unique<mrpt::graphslam::deciders::CFixedIntervalsNRD<Graph>>();
