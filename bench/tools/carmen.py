@@ -167,3 +167,27 @@ def read_scans(path):
     if scans["FLASER"]:
         flaser_max = max_range_m(path)
     return [(t, a, r, flaser_max) for t, a, r, _ in scans["FLASER"]]
+
+
+def scan_odometry(path):
+    """[(x, y, theta)] odometry pose of each laser scan, in the order and with the skipping rule
+    of read_scans: FLASER's odom_x odom_y odom_theta, ROBOTLASER1's robot pose (as shape-slam's
+    reader takes T_odom_robot)."""
+    poses = {"FLASER": [], "ROBOTLASER1": []}
+    with _open_text(path) as f:
+        for line in f:
+            fields = line.split()
+            if not fields or fields[0] not in poses or _scan_stamp(fields) is None:
+                continue
+            try:
+                if fields[0] == "FLASER":
+                    at = 2 + int(fields[1]) + 3
+                else:
+                    n = int(fields[8])
+                    at = 9 + n + 1 + int(fields[9 + n]) + 3
+                pose = tuple(float(v) for v in fields[at:at + 3])
+            except (ValueError, IndexError):
+                continue
+            if len(pose) == 3:
+                poses[fields[0]].append(pose)
+    return poses["ROBOTLASER1"] or poses["FLASER"]

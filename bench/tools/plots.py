@@ -13,7 +13,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 from atomic import temp_path_for  # noqa: E402
 from trajectories import align_onto  # noqa: E402
 
-COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown"]
+COLORS = ["tab:blue", "tab:orange", "tab:green", "tab:red", "tab:purple", "tab:brown", "tab:pink",
+          "tab:olive", "tab:cyan"]
 
 
 def _save(fig, path):

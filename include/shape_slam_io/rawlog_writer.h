@@ -1,11 +1,20 @@
-// Writer of observations-only MRPT rawlogs (built only with MRPT): what `shape-slam convert`
-// makes of a CARMEN log, so that MRPT's own apps (icp-slam, RawLogViewer...) can run on it.
+// Writers of MRPT rawlogs (built only with MRPT): what `shape-slam convert` makes of a CARMEN
+// log, so that MRPT's own apps (icp-slam, rbpf-slam, graphslam-engine, RawLogViewer...) can run
+// on it. Two layouts:
 //
-// For every scan, in log order: a CObservationOdometry (sensorLabel "ODOMETRY", the absolute
+// Observations-only (WriteObservationsRawlog): for every scan, in log order: a CObservationOdometry (sensorLabel "ODOMETRY", the absolute
 // odometry pose T_odom_robot) when the scan has one, then a CObservation2DRangeScan (sensorLabel
 // "LASER"). Both carry the scan's timestamp, converted exactly as mrpt::Clock::fromDouble does
 // (MRPT's time base has a resolution of 100 ns). MRPT 2.5.8's own carmen2rawlog writes the
 // conversion time instead of the log's timestamps.
+//
+// Actions / sensory frames (WritePairsRawlog), what rbpf-slam and graphslam-engine need: for
+// every scan a CActionCollection holding one CActionRobotMovement2D, the odometry increment
+// T_prev_robot from the previous scan's odometry pose to this scan's (MRPT's default motion
+// model options: a Gaussian), then a CSensoryFrame holding the CObservation2DRangeScan. Both
+// carry the scan's timestamp. The first scan's increment is zero, and so is the increment of a
+// scan without odometry (and every increment of a log whose odometry is all zero): such a log
+// gives these apps no motion prior at all.
 //
 // Beam geometry: CObservation2DRangeScan spreads N beams evenly over [-aperture/2,
 // +aperture/2] around the sensor's x axis. A scan whose beams are evenly spaced but not
@@ -27,7 +36,7 @@ namespace shape_slam::io {
 
 struct RawlogWriteStats {
   std::size_t scans = 0;
-  std::size_t odometry = 0;
+  std::size_t odometry = 0;  ///< scans with an odometry pose
   std::size_t bytes = 0;
 };
 
@@ -35,5 +44,8 @@ struct RawlogWriteStats {
 /// reads plain and gzip rawlogs alike). Throws LogError (reader, unrepresentable beams) or
 /// OutputError (atomic_file.h).
 RawlogWriteStats WriteObservationsRawlog(LogReader& reader, const std::string& path);
+
+/// The same in the actions / sensory-frames layout: one action-observation pair per scan.
+RawlogWriteStats WritePairsRawlog(LogReader& reader, const std::string& path);
 
 }  // namespace shape_slam::io

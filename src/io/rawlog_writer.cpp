@@ -2,8 +2,11 @@
 
 #include <mrpt/core/Clock.h>
 #include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CActionRobotMovement2D.h>
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CArchive.h>
 
@@ -53,6 +56,30 @@ mrpt::obs::CObservation2DRangeScan ToMrptScan(const LaserScan& scan, std::size_t
 
 }  // namespace internal
 
+namespace {
+
+// The odometry increment T_prev_robot from the previous scan's odometry pose (default motion
+// model options: a Gaussian whose spread grows with the increment) as an action collection.
+mrpt::obs::CActionCollection OdometryAction(const Pose2& T_prev_robot, double timestamp_s) {
+  mrpt::obs::CActionRobotMovement2D movement;
+  movement.timestamp = mrpt::Clock::fromDouble(timestamp_s);
+  movement.computeFromOdometry(
+      mrpt::poses::CPose2D(T_prev_robot.x, T_prev_robot.y, T_prev_robot.theta),
+      mrpt::obs::CActionRobotMovement2D::TMotionModelOptions());
+  mrpt::obs::CActionCollection actions;
+  actions.insert(movement);
+  return actions;
+}
+
+std::size_t WriteBufferAtomically(const mrpt::io::CMemoryStream& buffer, const std::string& path) {
+  const auto* data = static_cast<const char*>(buffer.getRawBufferData());
+  const std::string content(data, data + buffer.getTotalBytesCount());
+  WriteFileAtomically(path, content);
+  return content.size();
+}
+
+}  // namespace
+
 RawlogWriteStats WriteObservationsRawlog(LogReader& reader, const std::string& path) {
   mrpt::io::CMemoryStream buffer;
   auto archive = mrpt::serialization::archiveFrom(buffer);
@@ -70,10 +97,30 @@ RawlogWriteStats WriteObservationsRawlog(LogReader& reader, const std::string& p
     archive << internal::ToMrptScan(*scan, stats.scans);
     ++stats.scans;
   }
-  const auto* data = static_cast<const char*>(buffer.getRawBufferData());
-  const std::string content(data, data + buffer.getTotalBytesCount());
-  WriteFileAtomically(path, content);
-  stats.bytes = content.size();
+  stats.bytes = WriteBufferAtomically(buffer, path);
+  return stats;
+}
+
+RawlogWriteStats WritePairsRawlog(LogReader& reader, const std::string& path) {
+  mrpt::io::CMemoryStream buffer;
+  auto archive = mrpt::serialization::archiveFrom(buffer);
+  RawlogWriteStats stats;
+  std::optional<Pose2> T_odom_prev;
+  while (const std::optional<LaserScan> scan = reader.Next()) {
+    Pose2 T_prev_robot;  // zero without odometry, and for the first scan
+    if (scan->T_odom_robot) {
+      if (T_odom_prev) T_prev_robot = T_odom_prev->Inverse() * *scan->T_odom_robot;
+      T_odom_prev = scan->T_odom_robot;
+      ++stats.odometry;
+    }
+    archive << OdometryAction(T_prev_robot, scan->timestamp_s);
+    mrpt::obs::CSensoryFrame frame;
+    frame.insert(std::make_shared<mrpt::obs::CObservation2DRangeScan>(
+        internal::ToMrptScan(*scan, stats.scans)));
+    archive << frame;
+    ++stats.scans;
+  }
+  stats.bytes = WriteBufferAtomically(buffer, path);
   return stats;
 }
 

@@ -35,6 +35,12 @@ expect 2 "--guess" -- "$BIN" match "$LOG" --scan 0 --to 1 --guess 1 nan 0
 
 # convert, then map the converted rawlog; evaluate the run against itself (ATE 0).
 expect 0 "laser scans" -- "$BIN" convert "$LOG" "$WORK/head.rawlog"
+# The action-observation layout (rbpf-slam, graphslam-engine) reads back as the same scans.
+expect 0 "3 action-observation pairs, 3 scans with odometry" -- \
+  "$BIN" convert "$LOG" "$WORK/pairs.rawlog" --format pairs
+expect 0 "" -- "$BIN" run "$WORK/pairs.rawlog" --out "$WORK/pairs" --quiet
+[ "$(grep -vc "^#" "$WORK/pairs/trajectory.tum")" = 3 ] || fail "pairs rawlog: not 3 scans mapped"
+expect 2 "neither observations nor pairs" -- "$BIN" convert "$LOG" "$WORK/x.rawlog" --format xyz
 expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/head" --quiet
 for f in trajectory.tum map.polylines map.svg map.png map.pgm map.yaml map.gridmap map.simplemap \
   scan_times.csv stats.json; do
