@@ -1,7 +1,7 @@
 // Micro-benchmarks of the shape toolkit (paper §3.1, §4.1): extraction + DCE of a 361-beam scan
 // (a SICK-like 180 deg scan at 0.5 deg of a furnished room, 1 cm range noise), and S* of two
 // 20-vertex polylines. Run: build/bench/shape_bench [--benchmark_repetitions=5]
-// Figures measured are in the README (section "Speed").
+// Figures measured are in docs/notebook.md (section "Micro-benchmarks").
 #include <benchmark/benchmark.h>
 
 #include <cmath>
