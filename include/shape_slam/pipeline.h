@@ -152,7 +152,7 @@ struct ShapeSlamParams {
   /// errors, revisits. Without odometry the constant-velocity prediction slides along corridors
   /// (intel --no-odometry 0.72 -> 9.4 m ATE with it), so it is not used there. At 0.85 the
   /// fast-tracked poses lay within about 1 cm of the full match's, but the loop closure of
-  /// infinite-corridor came out worse in six runs of six (README, "Speed"): 0.95 takes only the
+  /// infinite-corridor came out worse in six runs of six (docs/design.md, "Speed"): 0.95 takes only the
   /// scans that leave no doubt. Above 1: off.
   double fast_track_min_fit = 0.95;
   double fast_track_max_correction_m = 0.15;    ///< metres
