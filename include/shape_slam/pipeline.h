@@ -362,6 +362,8 @@ class ShapeSlam {
   void RebuildFrom(int first_moved);
   void CheckpointMap(int keyframes);
   void BuildGlobalMap() const;
+  /// Keyframe k's scan inserted (§5.2) into `map` at its optimised pose.
+  MapUpdateStats InsertKeyframe(PolylineMap& map, int k, const ScanInsertionParams& insertion) const;
   std::vector<StampedPose> AnchoredPoses(bool tracking_frame) const;
 
   ShapeSlamParams params_;

@@ -104,43 +104,6 @@ Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams
   return Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
 }
 
-std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m) {
-  std::vector<Point2> samples;
-  for (const Polyline& p : fine) {
-    const std::vector<Point2> s = SamplePolyline(p, spacing_m);
-    samples.insert(samples.end(), s.begin(), s.end());
-  }
-  return samples;
-}
-
-RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
-                                  const std::vector<Polyline>& model, const Pose2& init,
-                                  const std::optional<PosePrior>& prior,
-                                  const RefinementParams& refinement, double coarse_gate_m) {
-  RefinementParams coarse = refinement;
-  coarse.max_correspondence_distance_m =
-      std::max(coarse_gate_m, refinement.max_correspondence_distance_m);
-  coarse.loss_scale_m = std::max(coarse.loss_scale_m, coarse_gate_m / 4.0);
-  const RefinementResult first = RefineAlignment(samples, model, init, prior, coarse);
-  return RefineAlignment(samples, model, first.T_map_scan, prior, refinement);
-}
-
-// Fraction of the samples within the grid's radius of the model at an estimate.
-double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGrid& grid,
-                   const Pose2& T_model_scan) {
-  int inliers = 0;
-  const PointTransform transform(T_model_scan);
-  for (const Point2& p : samples) inliers += grid.Nearest(transform(p)).segment >= 0 ? 1 : 0;
-  return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
-}
-
-std::vector<Point2> Thinned(const std::vector<Point2>& samples, double from_m, double to_m) {
-  const int every = std::max(1, static_cast<int>(std::lround(to_m / from_m)));
-  std::vector<Point2> thinned;
-  for (std::size_t i = 0; i < samples.size(); i += every) thinned.push_back(samples[i]);
-  return thinned;
-}
-
 // The window search's hypotheses around a centre, in a window scaled by `scale`.
 std::vector<Pose2> WindowCandidates(const std::vector<Polyline>& model,
                                     const std::vector<Point2>& samples, const Pose2& centre,

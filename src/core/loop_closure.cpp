@@ -12,7 +12,7 @@
 #include <utility>
 
 #include "shape_slam/candidate_selection.h"
-#include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/registration.h"
 #include "shape_slam/internal/validation.h"
 #include "shape_slam/internal/model_segments.h"
 #include "shape_slam/shape_matcher.h"

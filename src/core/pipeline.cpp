@@ -393,12 +393,8 @@ void ShapeSlam::RebuildFrom(int first_moved) {
   ++num_rebuilds_;
   num_reinserted_ += static_cast<long long>(keyframes_.size()) - start;
   for (std::size_t k = start; k < keyframes_.size(); ++k) {
-    Keyframe& kf = keyframes_[k];
-    kf.T_map_robot_in_map = graph_.Node(places_[k].node);
-    const Pose2 T_map_sensor = kf.T_map_robot_in_map * kf.scan.T_robot_sensor;
-    TagTouched(InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor,
-                                kf.trusted || map_.Empty(), insertion),
-               static_cast<int>(k));
+    keyframes_[k].T_map_robot_in_map = KeyframePose(static_cast<int>(k));
+    TagTouched(InsertKeyframe(map_, static_cast<int>(k), insertion), static_cast<int>(k));
     CheckpointMap(static_cast<int>(k) + 1);
   }
 }
@@ -414,12 +410,12 @@ void ShapeSlam::CheckpointMap(int keyframes) {
 
 void ShapeSlam::Finish() {
   const auto& edges = graph_.Edges();
-  if (UseSubmaps()) {
-    if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
-      graph_.Optimize(params_.loop_closure.graph);
-      ++num_optimizations_;
-    }
-  } else if (std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; })) {
+  const bool has_loops =
+      std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; });
+  if (UseSubmaps() && has_loops) {
+    graph_.Optimize(params_.loop_closure.graph);
+    ++num_optimizations_;
+  } else if (!UseSubmaps() && has_loops) {
     OptimizeAndRebuild(/*at_end=*/true);
     if (!anchors_.empty()) {
       last_T_map_robot_ = KeyframePose(anchors_.back().keyframe) * anchors_.back().T_keyframe_robot;
@@ -441,12 +437,15 @@ const PolylineMap& ShapeSlam::Map() const {
 void ShapeSlam::BuildGlobalMap() const {
   map_ = PolylineMap(params_.index_cell_size_m);
   const ScanInsertionParams insertion = ToScanInsertionParams(params_);
-  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    const Keyframe& kf = keyframes_[k];
-    const Pose2 T_map_sensor = KeyframePose(static_cast<int>(k)) * kf.scan.T_robot_sensor;
-    InsertScanShapes(map_, places_[k].shapes.fine, kf.scan, T_map_sensor, kf.trusted || map_.Empty(),
-                     insertion);
-  }
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) InsertKeyframe(map_, static_cast<int>(k), insertion);
+}
+
+MapUpdateStats ShapeSlam::InsertKeyframe(PolylineMap& map, int k,
+                                         const ScanInsertionParams& insertion) const {
+  const Keyframe& kf = keyframes_[k];
+  const Pose2 T_map_sensor = KeyframePose(k) * kf.scan.T_robot_sensor;
+  return InsertScanShapes(map, places_[k].shapes.fine, kf.scan, T_map_sensor,
+                          kf.trusted || map.Empty(), insertion);
 }
 
 std::vector<StampedPose> ShapeSlam::LocalTrajectory() const { return AnchoredPoses(true); }

@@ -5,7 +5,7 @@
 #include <utility>
 #include <vector>
 
-#include "shape_slam/internal/localization.h"
+#include "shape_slam/internal/registration.h"
 #include "shape_slam/candidate_selection.h"
 #include "shape_slam/shape_matcher.h"
 #include "shape_slam/window_search.h"

@@ -1,7 +1,8 @@
 // Internal (not installed): the localization step of the pipeline (pipeline.h) -- the scan's
 // shapes, the local model it is matched against, and the choice among the candidate estimates
 // that shape matching (§4.2, §4.3) and the prediction provide -- shared by pipeline.cpp (the
-// per-scan step and loop closures) and its tests.
+// per-scan step), localizer.cpp and their tests. The registration blocks it is made of
+// (internal/registration.h) are shared more widely.
 #pragma once
 
 #include <Eigen/Core>
@@ -9,31 +10,15 @@
 #include <vector>
 
 #include "shape_slam/internal/model_segments.h"
+#include "shape_slam/internal/registration.h"
 #include "shape_slam/pipeline.h"
 
 namespace shape_slam::internal {
 
 using Shapes = ScanShapes;
 
-/// Samples of the alignment polylines every spacing_m (§5.1).
-std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m);
-
-/// Every k-th sample, k = to_m / from_m: samples spaced from_m apart thinned to about to_m.
-std::vector<Point2> Thinned(const std::vector<Point2>& samples, double from_m, double to_m);
-
 /// Covariance of an odometry increment T_prev_cur under the noise model.
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
-
-/// Refines an estimate against every model polyline: with a wide gate first (coarse_gate_m, for
-/// odometry-size errors), then with the configured one.
-RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
-                                  const std::vector<Polyline>& model, const Pose2& init,
-                                  const std::optional<PosePrior>& prior,
-                                  const RefinementParams& refinement, double coarse_gate_m);
-
-/// Fraction of the samples within the grid's radius of the model at an estimate.
-double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
-                   const Pose2& T_model_scan);
 
 /// What a scan is localized against, in the sensor frame of the prediction.
 struct LocalModel {

@@ -1,0 +1,128 @@
+// The registration blocks (internal/registration.h) against brute force on small cases: for a
+// scan simulated in a known scene, the refinement from an estimate off by decimetres and degrees
+// lands on the pose that an exhaustive search over a pose grid finds best for the same robust
+// point-to-line cost (§5.1), and that pose is the true one within the scan noise.
+#include "shape_slam/internal/registration.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <random>
+#include <vector>
+
+#include "pose_matchers.h"
+#include "shape_slam/scan_shapes.h"
+#include "test_scenes.h"
+
+namespace shape_slam {
+namespace {
+
+using testing::Scene;
+
+constexpr double kDeg = M_PI / 180.0;
+
+double PointToSegment(const Point2& p, const Point2& a, const Point2& b) {
+  const Point2 d = b - a;
+  const double t = std::clamp((p - a).dot(d) / d.squaredNorm(), 0.0, 1.0);
+  return (a + t * d - p).norm();
+}
+
+// The cost the brute force minimises: squared distance of each sample to the nearest wall,
+// truncated at `gate` (samples farther away count as outliers, as the refinement's gate does).
+double TruncatedCost(const std::vector<Point2>& samples, const Scene& scene, const Pose2& T,
+                     double gate) {
+  double cost = 0.0;
+  const PointTransform transform(T);
+  for (const Point2& s : samples) {
+    const Point2 p = transform(s);
+    double best = gate;
+    for (const testing::Wall& w : scene) best = std::min(best, PointToSegment(p, w.a, w.b));
+    cost += best * best;
+  }
+  return cost;
+}
+
+// Exhaustive search on a grid of `n` steps each side of `centre`, then twice more around the
+// best with steps n times finer.
+Pose2 BruteForce(const std::vector<Point2>& samples, const Scene& scene, Pose2 centre,
+                 double step_m, double step_rad, int n, double gate) {
+  for (int level = 0; level < 3; ++level) {
+    Pose2 best = centre;
+    double best_cost = std::numeric_limits<double>::infinity();
+    for (int i = -n; i <= n; ++i) {
+      for (int j = -n; j <= n; ++j) {
+        for (int k = -n; k <= n; ++k) {
+          const Pose2 T(centre.x + i * step_m, centre.y + j * step_m, centre.theta + k * step_rad);
+          const double cost = TruncatedCost(samples, scene, T, gate);
+          if (cost < best_cost) best_cost = cost, best = T;
+        }
+      }
+    }
+    centre = best;
+    step_m /= n;
+    step_rad /= n;
+  }
+  return centre;
+}
+
+struct Case {
+  Scene scene;
+  Pose2 T_world_sensor;
+  Pose2 offset;  // the refinement starts at T_world_sensor * offset
+};
+
+TEST(RegistrationTest, RefinementFindsTheBruteForceOptimum) {
+  Scene pillars = testing::Room(0.0, 0.0, 7.0, 5.0);
+  testing::AddPillar(pillars, {2.0, 1.5}, 0.3);
+  testing::AddPillar(pillars, {5.0, 3.2}, 0.2);
+  const std::vector<Case> cases = {
+      {testing::OfficeRoom(), Pose2(2.5, 2.0, 0.3), Pose2(0.20, -0.15, 6 * kDeg)},
+      {testing::OfficeRoom(), Pose2(4.0, 3.5, -2.5), Pose2(-0.25, 0.10, -8 * kDeg)},
+      {pillars, Pose2(3.5, 2.5, 1.2), Pose2(0.15, 0.20, 5 * kDeg)},
+      {testing::LoopWorld(), Pose2(1.5, 1.5, 0.4), Pose2(-0.2, -0.2, -7 * kDeg)},
+  };
+  std::mt19937 prng(7);
+  testing::ScannerModel scanner;
+  scanner.beams = 361;
+  scanner.fov_rad = 2.0 * M_PI;
+  scanner.noise_sigma_m = 0.005;
+  const RefinementParams refinement;
+  for (std::size_t c = 0; c < cases.size(); ++c) {
+    SCOPED_TRACE("case " + std::to_string(c));
+    const Case& k = cases[c];
+    const LaserScan scan = testing::SimulateScan(k.scene, k.T_world_sensor, scanner, prng);
+    const std::vector<Point2> samples =
+        internal::AlignmentSamples(ExtractScanShapes(scan, ScanShapesParams{}).fine, 0.10);
+    ASSERT_GT(samples.size(), 50u);
+    std::vector<Polyline> model;
+    for (const testing::Wall& w : k.scene) model.push_back({w.a, w.b});
+
+    const RefinementResult refined = internal::RefineAgainstMap(
+        samples, model, k.T_world_sensor * k.offset, std::nullopt, refinement, 0.6);
+    ASSERT_TRUE(refined.converged);
+    // Brute force around the start, over a window larger than the offset (+-0.4 m, +-12 deg).
+    const Pose2 brute =
+        BruteForce(samples, k.scene, k.T_world_sensor * k.offset, 0.05, 1.5 * kDeg, 8,
+                   refinement.max_correspondence_distance_m);
+    EXPECT_THAT(refined.T_map_scan, IsNearly(brute, 0.002, 0.1 * kDeg));
+    EXPECT_THAT(brute, IsNearly(k.T_world_sensor, 0.02, 0.5 * kDeg));
+    // The inlier ratio against the true walls is high at the optimum and low at the start.
+    const internal::SegmentGrid grid(internal::MakeModelSegments(model), 0.05);
+    EXPECT_GT(internal::InlierRatio(samples, grid, refined.T_map_scan), 0.9);
+    EXPECT_LT(internal::InlierRatio(samples, grid, k.T_world_sensor * k.offset), 0.6);
+  }
+}
+
+TEST(RegistrationTest, ThinnedKeepsEveryKthSample) {
+  std::vector<Point2> samples;
+  for (int i = 0; i < 10; ++i) samples.emplace_back(i, 0.0);
+  const std::vector<Point2> thinned = internal::Thinned(samples, 0.1, 0.3);
+  ASSERT_EQ(thinned.size(), 4u);
+  EXPECT_EQ(thinned[1].x(), 3.0);
+  EXPECT_EQ(internal::Thinned(samples, 0.1, 0.05).size(), samples.size());
+}
+
+}  // namespace
+}  // namespace shape_slam
