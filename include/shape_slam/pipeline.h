@@ -347,6 +347,14 @@ class ShapeSlam {
   void CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
                      const Pose2& T_map_sensor_pred, const Pose2& T_map_sensor_last,
                      internal::Localization& loc, std::vector<VisiblePolyline>& visible) const;
+  // The per-scan stages of Process: register, keep the motion state, update map and graph.
+  struct Registration;  // pipeline.cpp
+  Registration Register(const ScanShapes& shapes, const LaserScan& scan,
+                        const Prediction& prediction, const Pose2& T_map_sensor_pred,
+                        ScanReport& report) const;
+  void UpdateMotion(const Pose2& T_track_robot, bool reset_lost);
+  Pose2 UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
+                          Registration& registration, ScanReport& report);
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,

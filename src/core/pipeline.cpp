@@ -520,6 +520,16 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
   visible = std::move(visible_last);
 }
 
+// What registering one scan gave: the correction of its prediction and the visible shape of
+// the tracking map (prediction frame; empty when the keyframe track placed the scan).
+struct ShapeSlam::Registration {
+  internal::Localization loc;
+  std::vector<VisiblePolyline> visible;
+  bool model_empty = true;  // nothing to register against yet (the first scan)
+};
+
+// One scan through the pipeline: extract (§3.1) -> predict -> register (§3, §4.2-§4.3, §5.1)
+// -> at keyframes, update the submaps (§5.2) and the pose graph.
 ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   ValidateScan(input_scan);
   const LaserScan scan = CounterClockwiseScan(input_scan);
@@ -527,91 +537,32 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.timestamp_s = scan.timestamp_s;
   ScanShapes shapes = ExtractScanShapes(scan, params_.shapes);
   report.polylines = static_cast<int>(shapes.coarse.size());
+
   TrackOdometry(scan);
   const Prediction prediction = Predict(scan);
   report.used_odometry = prediction.odometry_delta.has_value();
   odometry_.scans_predicted += report.used_odometry ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
 
-  internal::Localization loc;
-  std::vector<Polyline> recent_fine;  // made once: the keyframe track and Localize share it
-  // A scan predicted short of the next keyframe first tries the last keyframe alone
-  // (ShapeSlamParams::keyframe_track); the map's visible shape is then not needed.
-  if (params_.keyframe_track_min_fit <= 1.0 && prediction.odometry_delta && !keyframes_.empty() &&
-      !shapes.coarse.empty() && !IsKeyframe(prediction.T_map_robot)) {
-    recent_fine = LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred);
-    loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta, params_);
-    report.keyframe_tracked = loc.fast_track;
-  }
-  const PolylineMap& model_map = TrackingMap();
-  const bool model_empty = model_map.Empty();
-  std::vector<VisiblePolyline> visible;  // from the prediction
-  if (!report.keyframe_tracked && !model_empty && !shapes.coarse.empty()) {
-    std::optional<Pose2> velocity_hint;
-    if (prediction.T_pred_robot_velocity) {
-      velocity_hint = scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity *
-                      scan.T_robot_sensor;
-    }
-    loc = LocalizeAt(shapes, scan, T_map_sensor_pred, prediction.odometry_delta, velocity_hint,
-                     std::move(recent_fine), visible);
-    if (prediction.odometry_delta && !loc.fast_track && last_T_map_robot_ &&
-        loc.inlier_ratio < params_.odometry_check_fit) {
-      CheckOdometry(shapes, scan, T_map_sensor_pred, *last_T_map_robot_ * scan.T_robot_sensor,
-                    loc, visible);
-      report.odometry_overridden = loc.odometry_overridden;
-    }
-  }
+  Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
+  const internal::Localization& loc = registration.loc;
   // Poses in the tracking frame (the local frame with submaps, else the map's).
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
   report.fast_track = loc.fast_track && !report.keyframe_tracked;
-  lost_scans_ = loc.trusted || model_empty ? 0 : lost_scans_ + 1;
-  if (last_T_map_robot_) {
-    recent_motions_.push_back(last_T_map_robot_->Inverse() * T_track_robot);
-    if (static_cast<int>(recent_motions_.size()) > params_.velocity_window) {
-      recent_motions_.erase(recent_motions_.begin());
-    }
-  }
   report.covariance = loc.covariance;
   report.matched_pairs = loc.matched_pairs;
   report.inlier_ratio = loc.inlier_ratio;
   report.rms_error_m = loc.rms_error_m;
-  if (last_T_map_robot_) {
-    travel_m_ += (last_T_map_robot_->Translation() - T_track_robot.Translation()).norm();
-  }
+  UpdateMotion(T_track_robot, loc.trusted || registration.model_empty);
 
   // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
   // (new territory); elsewhere it would blur or duplicate what is there.
-  const bool may_update = loc.trusted || model_empty ||
+  const bool may_update = loc.trusted || registration.model_empty ||
                           loc.coverage < params_.max_untrusted_coverage;
   if (!shapes.fine.empty() && may_update && IsKeyframe(T_track_robot)) {
-    std::vector<Polyline> perceived_map;
-    for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
-    if (report.keyframe_tracked) {
-      visible = model_map.Visible(T_map_sensor, VisibilityFor(scan, /*no_estimate=*/false, params_));
-    } else {
-      const Pose2 correction_inverse = loc.correction.Inverse();
-      for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
-    }
-    const bool trusted = loc.trusted || model_empty;
-    if (UseSubmaps()) {
-      report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, trusted);
-    } else {
-      report.map_update =
-          UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
-      TagTouched(report.map_update, static_cast<int>(keyframes_.size()));
-    }
-    report.keyframe = true;
-    AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), T_track_robot, trusted,
-                loc.covariance);
-    CheckpointMap(static_cast<int>(keyframes_.size()));
-    if (loop_closer_.Update(places_, graph_)) {
-      OptimizeAndRebuild(/*at_end=*/false);
-      // The global map was rebuilt around the corrected keyframe: track on from there. With
-      // submaps the local frame stays; only the keyframe's global pose moved.
-      if (!UseSubmaps()) T_track_robot = KeyframePose(static_cast<int>(keyframes_.size()) - 1);
-    }
+    T_track_robot = UpdateMapAndGraph(std::move(shapes), scan, T_map_sensor, registration, report);
   }
   if (!keyframes_.empty()) {
     const int k = static_cast<int>(keyframes_.size()) - 1;
@@ -621,6 +572,88 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   last_T_map_robot_ = T_track_robot;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;
+}
+
+// A scan predicted short of the next keyframe first tries the last keyframe alone
+// (ShapeSlamParams::keyframe_track); otherwise, or when that falls short, it is registered
+// against the tracking map's visible shape, and with odometry that explains it poorly, checked
+// without the odometry (CheckOdometry).
+ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const LaserScan& scan,
+                                            const Prediction& prediction,
+                                            const Pose2& T_map_sensor_pred,
+                                            ScanReport& report) const {
+  Registration r;
+  std::vector<Polyline> recent_fine;  // made once: the keyframe track and Localize share it
+  if (params_.keyframe_track_min_fit <= 1.0 && prediction.odometry_delta && !keyframes_.empty() &&
+      !shapes.coarse.empty() && !IsKeyframe(prediction.T_map_robot)) {
+    recent_fine = LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred);
+    r.loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta, params_);
+    report.keyframe_tracked = r.loc.fast_track;
+  }
+  r.model_empty = TrackingMap().Empty();
+  if (report.keyframe_tracked || r.model_empty || shapes.coarse.empty()) return r;
+  std::optional<Pose2> velocity_hint;
+  if (prediction.T_pred_robot_velocity) {
+    velocity_hint =
+        scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity * scan.T_robot_sensor;
+  }
+  r.loc = LocalizeAt(shapes, scan, T_map_sensor_pred, prediction.odometry_delta, velocity_hint,
+                     std::move(recent_fine), r.visible);
+  if (prediction.odometry_delta && !r.loc.fast_track && last_T_map_robot_ &&
+      r.loc.inlier_ratio < params_.odometry_check_fit) {
+    CheckOdometry(shapes, scan, T_map_sensor_pred, *last_T_map_robot_ * scan.T_robot_sensor, r.loc,
+                  r.visible);
+    report.odometry_overridden = r.loc.odometry_overridden;
+  }
+  return r;
+}
+
+// The motion state after a scan: scans without a match in a row, the last motions (the
+// constant-velocity prediction) and the distance travelled.
+void ShapeSlam::UpdateMotion(const Pose2& T_track_robot, bool reset_lost) {
+  lost_scans_ = reset_lost ? 0 : lost_scans_ + 1;
+  if (!last_T_map_robot_) return;
+  recent_motions_.push_back(last_T_map_robot_->Inverse() * T_track_robot);
+  if (static_cast<int>(recent_motions_.size()) > params_.velocity_window) {
+    recent_motions_.erase(recent_motions_.begin());
+  }
+  travel_m_ += (last_T_map_robot_->Translation() - T_track_robot.Translation()).norm();
+}
+
+// A keyframe updates the map (§5.2: the active submaps, or the global map of the earlier
+// design) and becomes a pose-graph node; a loop closure found then optimises the graph. Returns
+// the robot's tracking pose, which only the global design's rebuild moves.
+Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
+                                   const Pose2& T_map_sensor, Registration& registration,
+                                   ScanReport& report) {
+  const internal::Localization& loc = registration.loc;
+  std::vector<VisiblePolyline>& visible = registration.visible;
+  std::vector<Polyline> perceived_map;
+  for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
+  if (report.keyframe_tracked) {
+    visible = TrackingMap().Visible(T_map_sensor, VisibilityFor(scan, /*no_estimate=*/false, params_));
+  } else {
+    const Pose2 correction_inverse = loc.correction.Inverse();
+    for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
+  }
+  const bool trusted = loc.trusted || registration.model_empty;
+  if (UseSubmaps()) {
+    report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, trusted);
+  } else {
+    report.map_update =
+        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
+    TagTouched(report.map_update, static_cast<int>(keyframes_.size()));
+  }
+  report.keyframe = true;
+  const Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
+  AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), T_track_robot, trusted,
+              loc.covariance);
+  CheckpointMap(static_cast<int>(keyframes_.size()));
+  if (!loop_closer_.Update(places_, graph_)) return T_track_robot;
+  OptimizeAndRebuild(/*at_end=*/false);
+  // The global map was rebuilt around the corrected keyframe: track on from there. With
+  // submaps the local frame stays; only the keyframe's global pose moved.
+  return UseSubmaps() ? T_track_robot : KeyframePose(static_cast<int>(keyframes_.size()) - 1);
 }
 
 std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {

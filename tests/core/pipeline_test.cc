@@ -198,6 +198,7 @@ TEST(PipelineTest, KeyframeTrackPlacesTheScansBetweenKeyframes) {
 TEST(PipelineTest, RebuildFromCheckpointsAgreesWithRebuildFromScratch) {
   const SimRun run = Simulate(5);
   ShapeSlamParams scratch, every_keyframe;
+  scratch.submaps.enabled = every_keyframe.submaps.enabled = false;  // the global-map design
   scratch.loop_closure.rebuild_checkpoint_every = 0;
   every_keyframe.loop_closure.rebuild_checkpoint_every = 1;
   ShapeSlam a(scratch), b(every_keyframe);
@@ -230,6 +231,7 @@ TEST(PipelineTest, RebuildFromCheckpointsAgreesWithRebuildFromScratch) {
 TEST(PipelineTest, DeformingTheMapAgreesWithRebuildingIt) {
   const SimRun run = Simulate(5);
   ShapeSlamParams rebuild;
+  rebuild.submaps.enabled = false;  // the global-map design, which rebuilds or deforms its map
   // Every closure optimises and every shift above 5 mm changes the map: the loop here is
   // closed well as it goes, its corrections are small.
   rebuild.loop_closure.min_correction_m = 0.0;
