@@ -34,7 +34,7 @@ bool WithinMotionBound(const Pose2& correction, double growth, const ShapeSlamPa
 std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Polyline>& model,
                                     bool model_cyclic, const std::optional<Pose2>& guess,
                                     const std::optional<Pose2>& velocity_hint,
-                                    const ShapeSlamParams& params, int& matched_pairs) {
+                                    const ShapeMatcherParams& matcher, int& matched_pairs) {
   if (model.empty()) return std::nullopt;
   ShapeMatchInput input;
   input.scan = shapes.coarse;
@@ -45,7 +45,7 @@ std::optional<Pose2> ShapeCandidate(const Shapes& shapes, const std::vector<Poly
     input.hint_estimates.push_back(Pose2());  // the robot did not move
     if (velocity_hint) input.hint_estimates.push_back(*velocity_hint);
   }
-  const ShapeMatchResult match = MatchShapes(input, guess, params.matcher);
+  const ShapeMatchResult match = MatchShapes(input, guess, matcher);
   matched_pairs = std::max(matched_pairs, static_cast<int>(match.matches.size()));
   if (match.matches.empty()) return std::nullopt;
   return match.T_model_scan;
@@ -119,90 +119,142 @@ std::vector<Pose2> WindowCandidates(const std::vector<Polyline>& model,
   return candidates;
 }
 
-// Candidates from shape matching against the visible map and the last keyframe (§4.2, §4.3),
-// the prediction and, without odometry, the hints and the window search; the candidate
-// selection ranks them and the first that the Ceres refinement and the gates accept wins.
+// One scan's registration against its local model: the samples, the model, the prior (odometry)
+// or motion bound (without), and the candidate selection that every attempt of Localize shares.
+class TrackingSearch {
+ public:
+  TrackingSearch(const Shapes& shapes, const LocalModel& model,
+                 const std::optional<Pose2>& odometry_delta,
+                 const std::optional<Pose2>& velocity_hint, int lost_scans,
+                 const ShapeSlamParams& params)
+      : shapes_(shapes), model_(model), velocity_hint_(velocity_hint), params_(params),
+        growth_(odometry_delta ? 1.0 : std::min(1.0 + lost_scans, params.max_lost_growth)) {
+    if (odometry_delta) {
+      guess_ = Pose2();  // the model is already seen from the odometry prediction
+      prior_ = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
+    }
+    all_ = model.map;
+    all_.insert(all_.end(), model.recent_fine.begin(), model.recent_fine.end());
+    samples_ = AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
+    if (Empty()) return;
+    selection_ = SelectionFor(params);
+    if (!odometry_delta) {
+      selection_.prior_weight = params.motion_prior_weight;
+      selection_.prior_sigma_m = growth_ * params.motion_prior_sigma_m;
+      selection_.prior_sigma_rad = growth_ * params.motion_prior_sigma_rad;
+    }
+    selector_.emplace(all_, selection_);
+    // Between equally good fits the one nearest the prediction (with odometry) or the
+    // constant-velocity extrapolation (without) wins.
+    reference_ = guess_.value_or(velocity_hint.value_or(Pose2()));
+    // Without odometry, the constant-velocity motion is a weak prior of the refinement: it
+    // decides only the directions the scan leaves unconstrained (along a featureless corridor).
+    if (!odometry_delta && velocity_hint && params.motion_prior_weight > 0.0) {
+      const double sm = growth_ * params.motion_prior_sigma_m;
+      const double sr = growth_ * params.motion_prior_sigma_rad;
+      motion_prior_ =
+          PosePrior{*velocity_hint, Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal()};
+    }
+  }
+
+  bool Empty() const { return samples_.empty() || all_.empty(); }
+  double growth() const { return growth_; }
+
+  /// With odometry: the prediction alone, refined (see FastTrack above).
+  void TryFastTrack(Localization& loc) const {
+    if (prior_) FastTrack(samples_, all_, *selector_, *prior_, params_.fast_track_min_fit, params_, loc);
+  }
+
+  /// The candidates ranked by the candidate selection; the first that the Ceres refinement and
+  /// the gates accept sets `loc`.
+  void Run(const ShapeMatcherParams& matcher, double window_scale, Localization& loc) {
+    const std::vector<Pose2> candidates = Candidates(matcher, window_scale, loc.matched_pairs);
+    const auto accept = [&](const Pose2& T) { return Accept(T); };
+    const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+      RefinementResult refined = RefineAlignment(samples_, all_, c.T_model_scan,
+                                                 prior_ ? prior_ : motion_prior_, params_.refinement);
+      if (!refined.converged || !Accept(refined.T_map_scan)) return std::nullopt;
+      return refined;
+    };
+    const auto selected = SelectRefined<RefinementResult>(
+        selector_->Rank(samples_, candidates, reference_, accept), selection_.max_refinements, refine);
+    if (!selected) return;
+    const RefinementResult& refined = selected->second;
+    Take(refined, selector_->Fit(samples_, refined.T_map_scan), params_, loc);
+  }
+
+  /// Unconfirmed: the prediction, which without odometry is the constant-velocity one (a robot
+  /// that was moving most likely still is). Its coverage decides whether it may still update
+  /// the map (new territory).
+  void Unconfirmed(Localization& loc) const {
+    loc.correction = guess_ ? Pose2() : velocity_hint_.value_or(Pose2());
+    const SegmentGrid near(MakeModelSegments(all_), params_.new_territory_distance_m);
+    loc.coverage = InlierRatio(samples_, near, loc.correction);
+  }
+
+ private:
+  bool Accept(const Pose2& T) const {
+    return prior_ ? WithinPrior(T, *prior_, params_.max_prior_mahalanobis)
+                  : WithinMotionBound(T, growth_, params_);
+  }
+
+  // Shape matching against the visible map and the last keyframe (§4.2, §4.3), the prediction
+  // and, without odometry, the hints and the window search.
+  std::vector<Pose2> Candidates(const ShapeMatcherParams& matcher, double window_scale,
+                                int& matched_pairs) {
+    std::vector<Pose2> candidates;
+    if (map_coarse_.empty()) {  // derived only when shape matching runs
+      for (const Polyline& m : model_.map) map_coarse_.push_back(ForShapeMatching(m, params_.shapes));
+    }
+    for (const auto& [shape_model, cyclic] :
+         {std::pair{&std::as_const(map_coarse_), model_.map_cyclic},
+          std::pair{&model_.recent_coarse, false}}) {
+      if (auto c = ShapeCandidate(shapes_, *shape_model, cyclic, guess_, velocity_hint_, matcher,
+                                  matched_pairs)) {
+        candidates.push_back(*c);
+      }
+    }
+    if (guess_) candidates.push_back(*guess_);
+    if (!guess_) {
+      candidates.push_back(Pose2());  // the robot did not move
+      if (velocity_hint_) candidates.push_back(*velocity_hint_);
+    }
+    if (window_scale > 0.0) {
+      for (const Pose2& c : WindowCandidates(all_, samples_, reference_, window_scale, params_)) {
+        candidates.push_back(c);
+      }
+    }
+    return candidates;
+  }
+
+  const Shapes& shapes_;
+  const LocalModel& model_;
+  const std::optional<Pose2> velocity_hint_;
+  const ShapeSlamParams& params_;
+  const double growth_;
+  std::optional<Pose2> guess_;
+  std::optional<PosePrior> prior_, motion_prior_;
+  std::vector<Polyline> all_;  // the visible map and the last keyframe
+  std::vector<Point2> samples_;
+  CandidateSelectionParams selection_;
+  std::optional<CandidateSelector> selector_;
+  Pose2 reference_;
+  std::vector<Polyline> map_coarse_;  // the visible map as shape matching sees it
+};
+
+// The fast track first (with odometry); shape matching only when it falls short; a second,
+// wider attempt for a scan that found no trusted match; else the prediction, unconfirmed.
 Localization Localize(const Shapes& shapes, const LocalModel& model,
                       const std::optional<Pose2>& odometry_delta,
                       const std::optional<Pose2>& velocity_hint, int lost_scans,
                       const ShapeSlamParams& params) {
   Localization loc;
-  const double growth = odometry_delta ? 1.0 : std::min(1.0 + lost_scans, params.max_lost_growth);
-  std::optional<Pose2> guess;
-  std::optional<PosePrior> prior;
-  if (odometry_delta) {
-    guess = Pose2();  // the model is already seen from the odometry prediction
-    prior = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
-  }
-  std::vector<Polyline> all = model.map;
-  all.insert(all.end(), model.recent_fine.begin(), model.recent_fine.end());
-  const std::vector<Point2> samples =
-      AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
-  if (samples.empty() || all.empty()) return loc;
-  CandidateSelectionParams selection = SelectionFor(params);
-  if (!odometry_delta) {
-    selection.prior_weight = params.motion_prior_weight;
-    selection.prior_sigma_m = growth * params.motion_prior_sigma_m;
-    selection.prior_sigma_rad = growth * params.motion_prior_sigma_rad;
-  }
-  const CandidateSelector selector(all, selection);
-  // Between equally good fits the one nearest the prediction (with odometry) or the
-  // constant-velocity extrapolation (without) wins.
-  const Pose2 reference = guess.value_or(velocity_hint.value_or(Pose2()));
-  // Without odometry, the constant-velocity motion is a weak prior of the refinement: it
-  // decides only the directions the scan leaves unconstrained (along a featureless corridor).
-  std::optional<PosePrior> motion_prior;
-  if (!odometry_delta && velocity_hint && params.motion_prior_weight > 0.0) {
-    const double sm = growth * params.motion_prior_sigma_m, sr = growth * params.motion_prior_sigma_rad;
-    motion_prior = PosePrior{*velocity_hint, Eigen::Vector3d(sm * sm, sm * sm, sr * sr).asDiagonal()};
-  }
-  const auto accept = [&](const Pose2& T) {
-    return prior ? WithinPrior(T, *prior, params.max_prior_mahalanobis)
-                 : WithinMotionBound(T, growth, params);
-  };
-  // The visible map as shape matching sees it, derived only when shape matching runs.
-  std::vector<Polyline> map_coarse;
-  const auto localize = [&](const ShapeMatcherParams& matcher, double window_scale) {
-    ShapeSlamParams p = params;
-    p.matcher = matcher;
-    std::vector<Pose2> candidates;
-    if (map_coarse.empty()) {
-      for (const Polyline& m : model.map) map_coarse.push_back(ForShapeMatching(m, params.shapes));
-    }
-    for (const auto& [shape_model, cyclic] : {std::pair{&std::as_const(map_coarse), model.map_cyclic},
-                                              std::pair{&model.recent_coarse, false}}) {
-      if (auto c = ShapeCandidate(shapes, *shape_model, cyclic, guess, velocity_hint, p,
-                                  loc.matched_pairs)) {
-        candidates.push_back(*c);
-      }
-    }
-    if (guess) candidates.push_back(*guess);
-    if (!guess) {
-      candidates.push_back(Pose2());  // the robot did not move
-      if (velocity_hint) candidates.push_back(*velocity_hint);
-    }
-    if (window_scale > 0.0) {
-      for (const Pose2& c : WindowCandidates(all, samples, reference, window_scale, params)) {
-        candidates.push_back(c);
-      }
-    }
-    const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
-      RefinementResult refined =
-          RefineAlignment(samples, all, c.T_model_scan, prior ? prior : motion_prior, params.refinement);
-      if (!refined.converged || !accept(refined.T_map_scan)) return std::nullopt;
-      return refined;
-    };
-    const auto selected = SelectRefined<RefinementResult>(
-        selector.Rank(samples, candidates, reference, accept), selection.max_refinements, refine);
-    if (!selected) return;
-    const RefinementResult& refined = selected->second;
-    Take(refined, selector.Fit(samples, refined.T_map_scan), params, loc);
-  };
-  // The fast track (with odometry): the prediction alone, refined; shape matching only when it
-  // falls short.
-  if (prior) FastTrack(samples, all, selector, *prior, params.fast_track_min_fit, params, loc);
-  const bool window_now = !odometry_delta && params.window_search_without_odometry;
-  if (!loc.fast_track) localize(params.matcher, window_now ? growth : 0.0);
+  TrackingSearch search(shapes, model, odometry_delta, velocity_hint, lost_scans, params);
+  if (search.Empty()) return loc;
+  search.TryFastTrack(loc);
+  const double window_scale =
+      !odometry_delta && params.window_search_without_odometry ? search.growth() : 0.0;
+  if (!loc.fast_track) search.Run(params.matcher, window_scale, loc);
   // A scan that found no trusted match tries again: without odometry with as many seed pairs
   // as scan-to-scan matching uses (scan_match_*), with odometry with the window search around
   // the prediction (window_search_fallback). Needed only for the odd scan.
@@ -210,18 +262,11 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
     ShapeMatcherParams thorough = params.matcher;
     thorough.max_seed_pairs = params.scan_match_seed_pairs;
     thorough.num_seeds = params.scan_match_seeds;
-    localize(thorough, window_now ? growth : 0.0);
+    search.Run(thorough, window_scale, loc);
   } else if (!loc.trusted && params.window_search_fallback) {
-    localize(params.matcher, params.window_search_odometry_scale);
+    search.Run(params.matcher, params.window_search_odometry_scale, loc);
   }
-  // Unconfirmed: the prediction, which without odometry is the constant-velocity one (a robot
-  // that was moving most likely still is).
-  // Its coverage decides whether it may still update the map (new territory).
-  if (!loc.trusted) {
-    loc.correction = odometry_delta ? Pose2() : velocity_hint.value_or(Pose2());
-    const SegmentGrid near(MakeModelSegments(all), params.new_territory_distance_m);
-    loc.coverage = InlierRatio(samples, near, loc.correction);
-  }
+  if (!loc.trusted) search.Unconfirmed(loc);
   return loc;
 }
 
