@@ -30,6 +30,50 @@ void ScanMatchParams::Validate() const {
   }
 }
 
+namespace {
+
+// The candidate poses of scan J in scan I's sensor frame. Shape matching: with the guess (§4.2,
+// D measured against it) and without any (§4.3, seeded by the most reliable pairs, with "the
+// robot did not move" as one more estimate); a guess far off gates the right pairs out of the
+// first, the second does not need it. Then the guess, the reference (the guess, else no motion:
+// among fits explaining the scan about equally well the one nearest it wins, as repetitive
+// places offer look-alike fits farther away) and the window search around the reference, all
+// turns included: where scan J fits scan I at all. Sets result's matched_pairs and reliability.
+std::vector<Pose2> Candidates(const ScanShapes& shapes_i, const ScanShapes& shapes_j,
+                              const std::vector<Point2>& samples,
+                              const std::optional<Pose2>& guess, const Pose2& reference,
+                              const ScanMatchParams& params, ScanMatchResult& result) {
+  std::vector<Pose2> candidates;
+  for (const bool use_guess : {true, false}) {
+    if (use_guess && !guess) continue;
+    ShapeMatchInput input;
+    input.scan = shapes_j.coarse;
+    input.scan_fine = shapes_j.fine;
+    input.model = shapes_i.coarse;
+    input.model_cyclic = !use_guess;
+    if (!use_guess) input.hint_estimates.push_back(reference);
+    ShapeMatcherParams matcher = params.matcher;
+    if (!use_guess) {
+      matcher.max_seed_pairs = params.seed_pairs;
+      matcher.num_seeds = params.seeds;
+    }
+    const ShapeMatchResult match = MatchShapes(input, use_guess ? guess : std::nullopt, matcher);
+    if (match.matches.empty()) continue;
+    candidates.push_back(match.T_model_scan);
+    result.matched_pairs = std::max(result.matched_pairs, static_cast<int>(match.matches.size()));
+    if (!use_guess) result.reliability = match.reliability;
+  }
+  if (guess) candidates.push_back(*guess);
+  candidates.push_back(reference);
+  const WindowSearch search(shapes_i.fine, params.window_search);
+  const std::vector<Point2> coarse = internal::Thinned(
+      samples, params.matcher.alignment.sample_spacing_m, params.window_search_spacing_m);
+  for (const WindowHypothesis& h : search.Search(coarse, reference)) candidates.push_back(h.T_model_scan);
+  return candidates;
+}
+
+}  // namespace
+
 ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
                            const std::optional<Pose2>& guess_T_i_j,
                            const ScanMatchParams& params) {
@@ -49,44 +93,11 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
       internal::AlignmentSamples(shapes_j.fine, params.matcher.alignment.sample_spacing_m);
   if (shapes_i.coarse.empty() || samples.empty()) return result;
 
-  // Shape matching: with the guess (§4.2, D measured against it) and without any (§4.3,
-  // seeded by the most reliable pairs, with "the robot did not move" as one more estimate). A
-  // guess far off gates the right pairs out of the first; the second does not need it.
   std::optional<Pose2> guess;
   if (guess_T_i_j) guess = to_sensor(*guess_T_i_j);
-  std::vector<Pose2> candidates;
-  for (const bool use_guess : {true, false}) {
-    if (use_guess && !guess) continue;
-    ShapeMatchInput input;
-    input.scan = shapes_j.coarse;
-    input.scan_fine = shapes_j.fine;
-    input.model = shapes_i.coarse;
-    input.model_cyclic = !use_guess;
-    if (!use_guess) input.hint_estimates.push_back(guess ? *guess : to_sensor(Pose2()));
-    ShapeMatcherParams matcher = params.matcher;
-    if (!use_guess) {
-      matcher.max_seed_pairs = params.seed_pairs;
-      matcher.num_seeds = params.seeds;
-    }
-    const ShapeMatchResult match =
-        MatchShapes(input, use_guess ? guess : std::nullopt, matcher);
-    if (match.matches.empty()) continue;
-    candidates.push_back(match.T_model_scan);
-    if (static_cast<int>(match.matches.size()) > result.matched_pairs) {
-      result.matched_pairs = static_cast<int>(match.matches.size());
-    }
-    if (!use_guess) result.reliability = match.reliability;
-  }
-  if (guess) candidates.push_back(*guess);
-  // Among fits explaining the scan about equally well, the one nearest the guess (or the
-  // smaller motion) wins: repetitive places offer look-alike fits farther away.
   const Pose2 reference = guess.value_or(to_sensor(Pose2()));
-  candidates.push_back(reference);
-  // The window around the reference, all turns included: where scan J fits scan I at all.
-  const WindowSearch search(shapes_i.fine, params.window_search);
-  const std::vector<Point2> coarse = internal::Thinned(
-      samples, params.matcher.alignment.sample_spacing_m, params.window_search_spacing_m);
-  for (const WindowHypothesis& h : search.Search(coarse, reference)) candidates.push_back(h.T_model_scan);
+  const std::vector<Pose2> candidates =
+      Candidates(shapes_i, shapes_j, samples, guess, reference, params, result);
 
   // Each candidate finished by quick ICP and ranked by how much of scan J it explains; the
   // best one that the Ceres refinement accepts wins.
