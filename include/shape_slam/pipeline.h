@@ -22,6 +22,7 @@
 #include "shape_slam/candidate_selection.h"
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
+#include "shape_slam/odometry_noise.h"
 #include "shape_slam/evaluation.h"
 #include "shape_slam/loop_closure.h"
 #include "shape_slam/polyline_map.h"
@@ -61,17 +62,6 @@ struct SubmapParams {
   bool enabled = false;
   /// Keyframes per submap (each keyframe is inserted into two submaps).
   int keyframes = 40;
-  void Validate() const;
-};
-
-/// Odometry noise model, giving the covariance of the prior on each scan's pose: the standard
-/// deviation grows with the distance travelled and the angle turned since the last scan.
-struct OdometryNoiseParams {
-  double sigma_xy_m = 0.05;                ///< floor, metres
-  double sigma_xy_per_m = 0.20;            ///< metres per metre travelled
-  double sigma_theta_rad = 0.10;           ///< floor, radians
-  double sigma_theta_per_rad = 0.50;       ///< radians per radian turned
-  double sigma_theta_per_m = 0.05;         ///< radians per metre travelled
   void Validate() const;
 };
 
@@ -200,6 +190,10 @@ struct OdometryReport {
   int scans = 0;                   ///< scans processed
   int scans_with_odometry = 0;     ///< of which carried an odometry pose
   int scans_predicted = 0;         ///< of which were predicted by odometry
+  /// The learned scale of the odometry noise model's translation and rotation sigmas
+  /// (OdometryNoiseParams::learn; 1 until learned).
+  double noise_scale_xy = 1.0;
+  double noise_scale_theta = 1.0;
 };
 
 /// A short name for the status: "disabled", "absent", "constant", "used".
@@ -353,6 +347,7 @@ class ShapeSlam {
                         const Prediction& prediction, const Pose2& T_map_sensor_pred,
                         ScanReport& report) const;
   void UpdateMotion(const Pose2& T_track_robot, bool reset_lost);
+  void LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction);
   Pose2 UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                           Registration& registration, ScanReport& report);
   bool IsKeyframe(const Pose2& T_map_robot) const;
@@ -399,6 +394,8 @@ class ShapeSlam {
   std::optional<Pose2> last_T_odom_robot_;
   std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
   OdometryReport odometry_;
+  OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
+  ShapeSlamParams tracking_params_;      // params_ with the learned odometry noise
   double travel_m_ = 0.0;
   int lost_scans_ = 0;  // consecutive scans without a trusted match
 };

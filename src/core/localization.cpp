@@ -94,16 +94,6 @@ bool FastTrack(const std::vector<Point2>& samples, const std::vector<Polyline>& 
 
 }  // namespace
 
-// Covariance of the odometry increment T_prev_cur, as a prior on the correction.
-Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {
-  const double distance = delta.Translation().norm();
-  const double turn = std::abs(delta.theta);
-  const double sxy = noise.sigma_xy_m + noise.sigma_xy_per_m * distance;
-  const double sth =
-      noise.sigma_theta_rad + noise.sigma_theta_per_rad * turn + noise.sigma_theta_per_m * distance;
-  return Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
-}
-
 // The window search's hypotheses around a centre, in a window scaled by `scale`.
 std::vector<Pose2> WindowCandidates(const std::vector<Polyline>& model,
                                     const std::vector<Point2>& samples, const Pose2& centre,

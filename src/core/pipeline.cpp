@@ -45,14 +45,6 @@ void SubmapParams::Validate() const {
   if (keyframes < 2) throw std::invalid_argument("SubmapParams::keyframes must be >= 2");
 }
 
-void OdometryNoiseParams::Validate() const {
-  Positive(sigma_xy_m, "OdometryNoiseParams::sigma_xy_m");
-  Positive(sigma_theta_rad, "OdometryNoiseParams::sigma_theta_rad");
-  NonNegative(sigma_xy_per_m, "OdometryNoiseParams::sigma_xy_per_m");
-  NonNegative(sigma_theta_per_rad, "OdometryNoiseParams::sigma_theta_per_rad");
-  NonNegative(sigma_theta_per_m, "OdometryNoiseParams::sigma_theta_per_m");
-}
-
 void ShapeSlamParams::Validate() const {
   shapes.Validate();
   visibility.Validate();
@@ -140,7 +132,9 @@ const char* ToString(OdometryStatus status) {
 ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
     : params_(params),
       map_(params.index_cell_size_m),
-      loop_closer_(params.loop_closure, ToScanMatchParams(params)) {
+      loop_closer_(params.loop_closure, ToScanMatchParams(params)),
+      odometry_noise_(params.odometry_noise),
+      tracking_params_(params) {
   params_.Validate();
   if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
 }
@@ -157,7 +151,7 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_m
     throw std::invalid_argument("ShapeSlam: the first robot pose is not finite");
   }
   // A loaded map is continued with the single global map (submaps do not take one yet).
-  params_.submaps.enabled = false;
+  params_.submaps.enabled = tracking_params_.submaps.enabled = false;
   initial_map_ = PolylineMap(params_.index_cell_size_m);
   for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
   map_ = initial_map_;
@@ -495,7 +489,8 @@ internal::Localization ShapeSlam::LocalizeAt(const ScanShapes& shapes, const Las
                             ? LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred)
                             : std::move(recent_fine);
   }
-  return internal::Localize(shapes, model, odometry_delta, velocity_hint, lost_scans_, params_);
+  return internal::Localize(shapes, model, odometry_delta, velocity_hint, lost_scans_,
+                            tracking_params_);
 }
 
 // Odometry as a prior, not a gate (ShapeSlamParams::odometry_check_fit): a scan that the
@@ -546,6 +541,9 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
   const internal::Localization& loc = registration.loc;
+  if (prediction.odometry_delta && loc.trusted && !loc.odometry_overridden) {
+    LearnOdometryNoise(*prediction.odometry_delta, loc.correction);
+  }
   // Poses in the tracking frame (the local frame with submaps, else the map's).
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
@@ -587,7 +585,8 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
   if (params_.keyframe_track_min_fit <= 1.0 && prediction.odometry_delta && !keyframes_.empty() &&
       !shapes.coarse.empty() && !IsKeyframe(prediction.T_map_robot)) {
     recent_fine = LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred);
-    r.loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta, params_);
+    r.loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta,
+                                    tracking_params_);
     report.keyframe_tracked = r.loc.fast_track;
   }
   r.model_empty = TrackingMap().Empty();
@@ -606,6 +605,21 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
     report.odometry_overridden = r.loc.odometry_overridden;
   }
   return r;
+}
+
+// A trusted registration's correction of the odometry's prediction: one sample of the log's
+// odometry noise (OdometryNoiseLearner), which the next scans' prior uses. The prior's weight
+// follows the learned noise; its gate (max_prior_mahalanobis) never gets tighter than the
+// configured model's: a log with good odometry then holds the scans firmly along a corridor,
+// yet a scan the odometry misjudges by the configured noise is still matched.
+void ShapeSlam::LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction) {
+  odometry_noise_.Add(odometry_delta, correction);
+  tracking_params_.odometry_noise = odometry_noise_.Current();
+  const double tightest = std::min(
+      {1.0, odometry_noise_.TranslationScale(), odometry_noise_.RotationScale()});
+  tracking_params_.max_prior_mahalanobis = params_.max_prior_mahalanobis / tightest;
+  odometry_.noise_scale_xy = odometry_noise_.TranslationScale();
+  odometry_.noise_scale_theta = odometry_noise_.RotationScale();
 }
 
 // The motion state after a scan: scans without a match in a row, the last motions (the

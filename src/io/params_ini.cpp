@@ -198,6 +198,11 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"odometry_noise", "sigma_theta_rad", "odometry prior: heading standard deviation floor (rad)", &p.odometry_noise.sigma_theta_rad},
       {"odometry_noise", "sigma_theta_per_rad", "... plus this per radian turned", &p.odometry_noise.sigma_theta_per_rad},
       {"odometry_noise", "sigma_theta_per_m", "... plus this per metre travelled", &p.odometry_noise.sigma_theta_per_m},
+      {"odometry_noise", "learn", "scale the sigmas to the log: from the corrections trusted scan matches make to the odometry", &p.odometry_noise.learn},
+      {"odometry_noise", "learn_window", "... over the last this many matches", &p.odometry_noise.learn_window},
+      {"odometry_noise", "learn_min_samples", "... once this many are in", &p.odometry_noise.learn_min_samples},
+      {"odometry_noise", "learn_min_scale", "... scaling the sigmas by at least this", &p.odometry_noise.learn_min_scale},
+      {"odometry_noise", "learn_max_scale", "... and at most this", &p.odometry_noise.learn_max_scale},
       {"scan_match", "seed_pairs", "scan-to-scan matching without a guess (shape-slam match): most reliable pairs tried", &p.scan_match_seed_pairs},
       {"scan_match", "seeds", "... of which this many go through the second pass", &p.scan_match_seeds},
   };

@@ -17,9 +17,6 @@ namespace shape_slam::internal {
 
 using Shapes = ScanShapes;
 
-/// Covariance of an odometry increment T_prev_cur under the noise model.
-Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
-
 /// What a scan is localized against, in the sensor frame of the prediction.
 struct LocalModel {
   /// Visible map shape, CCW ordered. Localize derives the shape-matching view of it

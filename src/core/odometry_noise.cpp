@@ -1,0 +1,80 @@
+#include "shape_slam/odometry_noise.h"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "shape_slam/internal/validation.h"
+
+namespace shape_slam {
+namespace {
+
+// Medians of the chi-square distribution with one and two degrees of freedom.
+constexpr double kChi2Median1 = 0.454936;
+constexpr double kChi2Median2 = 1.386294;
+
+double Median(std::vector<double> values) {
+  const auto middle = values.begin() + values.size() / 2;
+  std::nth_element(values.begin(), middle, values.end());
+  return *middle;
+}
+
+}  // namespace
+
+void OdometryNoiseParams::Validate() const {
+  internal::Positive(sigma_xy_m, "OdometryNoiseParams::sigma_xy_m");
+  internal::Positive(sigma_theta_rad, "OdometryNoiseParams::sigma_theta_rad");
+  internal::NonNegative(sigma_xy_per_m, "OdometryNoiseParams::sigma_xy_per_m");
+  internal::NonNegative(sigma_theta_per_rad, "OdometryNoiseParams::sigma_theta_per_rad");
+  internal::NonNegative(sigma_theta_per_m, "OdometryNoiseParams::sigma_theta_per_m");
+  if (learn_window < 1 || learn_min_samples < 1 || learn_min_samples > learn_window) {
+    throw std::invalid_argument(
+        "OdometryNoiseParams::learn_window and learn_min_samples must be >= 1, "
+        "learn_min_samples <= learn_window");
+  }
+  internal::Positive(learn_min_scale, "OdometryNoiseParams::learn_min_scale");
+  if (!(learn_max_scale >= learn_min_scale)) {
+    throw std::invalid_argument("OdometryNoiseParams::learn_max_scale must be >= learn_min_scale");
+  }
+}
+
+Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {
+  const double distance = delta.Translation().norm();
+  const double turn = std::abs(delta.theta);
+  const double sxy = noise.sigma_xy_m + noise.sigma_xy_per_m * distance;
+  const double sth =
+      noise.sigma_theta_rad + noise.sigma_theta_per_rad * turn + noise.sigma_theta_per_m * distance;
+  return Eigen::Vector3d(sxy * sxy, sxy * sxy, sth * sth).asDiagonal();
+}
+
+OdometryNoiseLearner::OdometryNoiseLearner(const OdometryNoiseParams& configured)
+    : configured_(configured), current_(configured) {}
+
+void OdometryNoiseLearner::Add(const Pose2& odometry_delta, const Pose2& correction) {
+  if (!configured_.learn) return;
+  const Eigen::Matrix3d covariance = OdometryCovariance(odometry_delta, configured_);
+  const double xy2 = correction.Translation().squaredNorm() / covariance(0, 0);
+  const double theta2 = correction.theta * correction.theta / covariance(2, 2);
+  if (static_cast<int>(xy2_.size()) < configured_.learn_window) {
+    xy2_.push_back(xy2);
+    theta2_.push_back(theta2);
+  } else {
+    xy2_[next_] = xy2;
+    theta2_[next_] = theta2;
+    next_ = (next_ + 1) % configured_.learn_window;
+  }
+  if (static_cast<int>(xy2_.size()) < configured_.learn_min_samples) return;
+  const auto bounded = [&](double scale) {
+    return std::clamp(scale, configured_.learn_min_scale, configured_.learn_max_scale);
+  };
+  scale_xy_ = bounded(std::sqrt(Median(xy2_) / kChi2Median2));
+  scale_theta_ = bounded(std::sqrt(Median(theta2_) / kChi2Median1));
+  current_ = configured_;
+  current_.sigma_xy_m *= scale_xy_;
+  current_.sigma_xy_per_m *= scale_xy_;
+  current_.sigma_theta_rad *= scale_theta_;
+  current_.sigma_theta_per_rad *= scale_theta_;
+  current_.sigma_theta_per_m *= scale_theta_;
+}
+
+}  // namespace shape_slam
