@@ -230,6 +230,11 @@ class LoopCloser {
   /// shape matching, selection); each returns the verified closure or nullopt.
   std::optional<LoopClosure> QuickMatch(const Sides& sides, const PoseGraph& graph) const;
   std::optional<LoopClosure> FullMatch(const Sides& sides, const PoseGraph& graph) const;
+  // The best match of the current keyframe among the candidates (quick checks first).
+  std::optional<LoopClosure> Search(const std::vector<LoopKeyframe>& keyframes,
+                                    const PoseGraph& graph, int current);
+  // Whether the graph optimised with `accepted` breaks too many earlier loop edges.
+  bool BreaksEarlierLoops(const PoseGraph& graph, const std::vector<LoopClosure>& accepted) const;
   /// The refinement of one candidate against the place; nullopt unless it converged.
   std::optional<RefinementResult> Refine(const Sides& sides, const RankedCandidate& candidate) const;
   /// The closure a refined match implies, if it passes the verification (both sides explain

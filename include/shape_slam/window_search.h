@@ -87,6 +87,8 @@ class WindowSearch {
  private:
   struct Node;
   int LevelValue(int level, int ix, int iy) const;
+  std::vector<int> RotatedCells(const std::vector<Point2>& samples_scan, const Pose2& centre,
+                                int rotations, int half_rotations, double step_rad) const;
 
   WindowSearchParams params_;
   double resolution_m_ = 0.1;

@@ -470,22 +470,15 @@ bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
          std::abs(error.theta) <= params_.confirm_tolerance_rad + params_.confirm_tolerance_rad_per_m * chains;
 }
 
-bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
-  const int current = static_cast<int>(keyframes.size()) - 1;
-  if (!params_.enabled || current < 1 || current % params_.search_every != 0) return false;
-  ++num_searches_;
-  pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
-                                [&](const LoopClosure& p) {
-                                  return current - p.new_keyframe > params_.confirm_within_keyframes;
-                                }),
-                 pending_.end());
+// One Dijkstra per search serves the candidates and their matches. The quick check at every
+// candidate first: where one passes, the graph is right there and the full searches of the
+// others would only find the same. The best fit wins.
+std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& keyframes,
+                                              const PoseGraph& graph, int current) {
   std::optional<LoopClosure> loop;
-  // One Dijkstra per search serves the candidates and their matches.
   const std::vector<double> graph_distance = GraphDistances(keyframes, graph, current);
   const std::vector<int> candidates = CandidatesAt(keyframes, graph, graph_distance);
   if (!candidates.empty()) round_robin_ += std::max(1, params_.max_candidates - 1);
-  // The quick check at every candidate first: where one passes, the graph is right there and
-  // the full searches of the others would only find the same.
   std::vector<std::unique_ptr<Sides>> sides;
   for (const int old : candidates) {
     if (auto s = MakeSides(keyframes, graph, old, graph_distance[old])) sides.push_back(std::move(s));
@@ -497,6 +490,40 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
   if (!loop) {
     for (const auto& s : sides) keep_best(FullMatch(*s, graph));
   }
+  return loop;
+}
+
+// The closures already in the graph vote on the new ones: the graph optimised with them must
+// still agree with the earlier loop edges it agreed with (a wrong pair of consistent closures
+// bends the graph away from them).
+bool LoopCloser::BreaksEarlierLoops(const PoseGraph& graph,
+                                    const std::vector<LoopClosure>& accepted) const {
+  PoseGraph trial = graph;
+  for (const LoopClosure& a : accepted) trial.AddEdge(a.edge);
+  trial.Optimize(params_.graph);
+  int broken = 0, kept = 0;
+  const auto agrees = [&](const PoseGraph& g, const PoseGraphEdge& e) {
+    const Pose2 error = e.T_from_to.Inverse() * (g.Node(e.from).Inverse() * g.Node(e.to));
+    return error.Translation().norm() <= params_.verify_tolerance_m &&
+           std::abs(error.theta) <= params_.verify_tolerance_rad;
+  };
+  for (const PoseGraphEdge& e : graph.Edges()) {
+    if (!e.loop || !agrees(graph, e)) continue;
+    (agrees(trial, e) ? kept : broken) += 1;
+  }
+  return broken > params_.max_broken_fraction * (broken + kept);
+}
+
+bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  if (!params_.enabled || current < 1 || current % params_.search_every != 0) return false;
+  ++num_searches_;
+  pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
+                                [&](const LoopClosure& p) {
+                                  return current - p.new_keyframe > params_.confirm_within_keyframes;
+                                }),
+                 pending_.end());
+  std::optional<LoopClosure> loop = Search(keyframes, graph, current);
   if (!loop) return false;
   ++num_found_;
   const Pose2& c = loop->correction;
@@ -521,23 +548,7 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
     }
   }
   accepted.push_back(*loop);
-  // The closures already in the graph vote on the new ones: the graph optimised with them must
-  // still agree with the earlier loop edges it agreed with (a wrong pair of consistent
-  // closures bends the graph away from them).
-  PoseGraph trial = graph;
-  for (const LoopClosure& a : accepted) trial.AddEdge(a.edge);
-  trial.Optimize(params_.graph);
-  int broken = 0, kept = 0;
-  const auto agrees = [&](const PoseGraph& g, const PoseGraphEdge& e) {
-    const Pose2 error = e.T_from_to.Inverse() * (g.Node(e.from).Inverse() * g.Node(e.to));
-    return error.Translation().norm() <= params_.verify_tolerance_m &&
-           std::abs(error.theta) <= params_.verify_tolerance_rad;
-  };
-  for (const PoseGraphEdge& e : graph.Edges()) {
-    if (!e.loop || !agrees(graph, e)) continue;
-    (agrees(trial, e) ? kept : broken) += 1;
-  }
-  if (broken > params_.max_broken_fraction * (broken + kept)) {
+  if (BreaksEarlierLoops(graph, accepted)) {
     ++num_rejected_;
     pending_.clear();
     return false;

@@ -142,6 +142,38 @@ double WindowSearch::Fit(const std::vector<Point2>& samples_scan, const Pose2& T
   return static_cast<double>(sum) / (255.0 * samples_scan.size());
 }
 
+namespace {
+
+// Whether a pose lies within distinct_m and distinct_rad of a hypothesis already found.
+bool SameAsBetter(const std::vector<WindowHypothesis>& found, const Pose2& pose,
+                  const WindowSearchParams& params) {
+  return std::any_of(found.begin(), found.end(), [&](const WindowHypothesis& h) {
+    return (h.T_model_scan.Translation() - pose.Translation()).norm() < params.distinct_m &&
+           std::abs(NormalizeAngle(h.T_model_scan.theta - pose.theta)) < params.distinct_rad;
+  });
+}
+
+}  // namespace
+
+// The samples' cells (x, y interleaved, rotation-major) at every rotation step around the
+// centre, the centre translation included.
+std::vector<int> WindowSearch::RotatedCells(const std::vector<Point2>& samples_scan,
+                                            const Pose2& centre, int rotations,
+                                            int half_rotations, double step_rad) const {
+  const std::size_t n = samples_scan.size();
+  std::vector<int> cells(static_cast<std::size_t>(rotations) * n * 2);
+  for (int r = 0; r < rotations; ++r) {
+    const double dtheta = (r - half_rotations) * step_rad;
+    const PointTransform transform(Pose2(centre.x, centre.y, centre.theta + dtheta));
+    for (std::size_t i = 0; i < n; ++i) {
+      const Point2 q = (transform(samples_scan[i]) - origin_) / resolution_m_;
+      cells[(r * n + i) * 2] = static_cast<int>(std::floor(q.x()));
+      cells[(r * n + i) * 2 + 1] = static_cast<int>(std::floor(q.y()));
+    }
+  }
+  return cells;
+}
+
 std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& samples_scan,
                                                    const Pose2& T_model_scan_centre) const {
   std::vector<WindowHypothesis> found;
@@ -158,19 +190,11 @@ std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& sa
   const int c = static_cast<int>(std::ceil(params_.half_window_m / resolution_m_));
   const int top = levels_ - 1;
 
-  // The samples' cells at every rotation, the centre translation included.
-  std::vector<int> cells(static_cast<std::size_t>(rotations) * n * 2);
+  const std::vector<int> cells =
+      RotatedCells(samples_scan, T_model_scan_centre, rotations, half_rotations, step_rad);
   std::vector<double> rotation_penalty(rotations);
   for (int r = 0; r < rotations; ++r) {
-    const double dtheta = (r - half_rotations) * step_rad;
-    const PointTransform transform(Pose2(T_model_scan_centre.x, T_model_scan_centre.y,
-                                         T_model_scan_centre.theta + dtheta));
-    for (int i = 0; i < n; ++i) {
-      const Point2 q = (transform(samples_scan[i]) - origin_) / resolution_m_;
-      cells[(static_cast<std::size_t>(r) * n + i) * 2] = static_cast<int>(std::floor(q.x()));
-      cells[(static_cast<std::size_t>(r) * n + i) * 2 + 1] = static_cast<int>(std::floor(q.y()));
-    }
-    const double e = dtheta / params_.prior_sigma_rad;
+    const double e = (r - half_rotations) * step_rad / params_.prior_sigma_rad;
     rotation_penalty[r] = params_.prior_weight * e * e;
   }
   const double cell_penalty = params_.prior_weight * std::pow(resolution_m_ / params_.prior_sigma_m, 2);
@@ -211,11 +235,7 @@ std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& sa
     const Pose2 pose(T_model_scan_centre.x + node.tx * resolution_m_,
                      T_model_scan_centre.y + node.ty * resolution_m_,
                      NormalizeAngle(T_model_scan_centre.theta + dtheta));
-    const bool same_as_better = std::any_of(found.begin(), found.end(), [&](const WindowHypothesis& h) {
-      return (h.T_model_scan.Translation() - pose.Translation()).norm() < params_.distinct_m &&
-             std::abs(NormalizeAngle(h.T_model_scan.theta - pose.theta)) < params_.distinct_rad;
-    });
-    if (same_as_better) continue;
+    if (SameAsBetter(found, pose, params_)) continue;
     const double penalty =
         rotation_penalty[node.rotation] + cell_penalty * (node.tx * node.tx + node.ty * node.ty);
     found.push_back({pose, node.bound, node.bound + penalty});
