@@ -14,7 +14,10 @@
 //    divided by point_sigma_m. Samples whose nearest point lies beyond an open end of a model
 //    polyline are not associated (reject_end_projections, as in alignment.h).
 //  * Robust loss: Cauchy (default) or Huber on that distance, scale loss_scale_m.
-//  * Prior: r = S (pose - prior), S^T S = covariance^-1 (internal/pose_prior_cost.h).
+//  * Prior: r = S (pose - prior), S^T S = covariance^-1 (internal/pose_prior_cost.h); Gaussian,
+//    or heavy-tailed (PosePrior::loss_sigmas): a Cauchy loss on the part of r in the directions
+//    the samples constrain better than the prior, Gaussian in the others; the loss's weight rho'
+//    scales that part's information in the covariance.
 //  * Covariance of (x, y, theta) [m^2, m*rad, rad^2]: the inverse of the Gauss-Newton
 //    information J^T W J of the final problem at the solution (W: the robust loss's weights
 //    rho'(s) of the samples; plus the prior's information), computed here from the residual
@@ -77,11 +80,17 @@ struct RefinementParams {
   void Validate() const;
 };
 
-/// A Gaussian prior on T_map_scan: its mean and the 3x3 covariance of (x [m], y [m],
-/// theta [rad]), symmetric positive definite.
+/// A prior on T_map_scan: its mean and the 3x3 covariance of (x [m], y [m], theta [rad]),
+/// symmetric positive definite.
 struct PosePrior {
   Pose2 T_map_scan;
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();
+  /// 0: Gaussian. > 0: heavy-tailed in the directions the samples constrain better than the
+  /// prior, a Cauchy loss of scale loss_sigmas standard deviations: within that distance the
+  /// prior holds about as a Gaussian does, beyond it its pull fades (a prior far from the
+  /// scan's evidence, e.g. an odometry glitch, bends the estimate little). In the directions
+  /// the samples leave weaker than the prior (along a featureless corridor) it stays Gaussian.
+  double loss_sigmas = 0.0;
 };
 
 struct RefinementResult {

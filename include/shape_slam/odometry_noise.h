@@ -29,6 +29,10 @@ struct OdometryNoiseParams {
   int learn_min_samples = 20;
   double learn_min_scale = 0.25;
   double learn_max_scale = 4.0;
+  /// The odometry prior's tail (PosePrior::loss_sigmas): 0 Gaussian; > 0 a Cauchy loss of this
+  /// many standard deviations, so that a glitch or a poor odometry bends a clear scan match
+  /// little (issue 22). Off by default while measured: docs/design.md, "Odometry as a prior".
+  double loss_sigmas = 0.0;
   void Validate() const;
 };
 

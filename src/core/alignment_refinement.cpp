@@ -42,6 +42,7 @@ using Associator = std::function<std::vector<Association>(const Pose2& T_map_sca
 struct ShiftedPrior {
   Pose2 mean;
   Eigen::Matrix3d sqrt_information;
+  double loss_sigmas = 0.0;  // PosePrior::loss_sigmas
 };
 
 // What one Ceres solve produced.
@@ -83,8 +84,12 @@ std::optional<ShiftedPrior> ShiftPrior(const std::optional<PosePrior>& prior,
                                        const Point2& origin) {
   if (!prior) return std::nullopt;
   internal::CheckFinite(prior->T_map_scan, "PosePrior::T_map_scan");
+  if (!(prior->loss_sigmas >= 0.0) || !std::isfinite(prior->loss_sigmas)) {
+    throw std::invalid_argument("PosePrior::loss_sigmas must be >= 0 and finite");
+  }
   const Point2 t = prior->T_map_scan.Translation() - origin;
-  return ShiftedPrior{{t.x(), t.y(), prior->T_map_scan.theta}, SqrtInformation(prior->covariance)};
+  return ShiftedPrior{{t.x(), t.y(), prior->T_map_scan.theta}, SqrtInformation(prior->covariance),
+                      prior->loss_sigmas};
 }
 
 std::unique_ptr<ceres::LossFunction> MakeLoss(const RefinementParams& params) {
@@ -146,6 +151,43 @@ std::pair<Eigen::Matrix3d, double> SampleInformation(
   return {information, std::sqrt(sum_d2 / static_cast<double>(costs.size()))};
 }
 
+// The heavy-tailed prior (PosePrior::loss_sigmas) in two parts, as square roots of
+// information: `held`, the directions in which the samples inform the pose less than the prior
+// does (along a featureless corridor), stays Gaussian, since there the prior is all there is;
+// `yielding`, the directions the samples constrain better, gets the Cauchy loss. In the prior's
+// whitened coordinates u = S (pose - mean) the samples' information is S^-T H S^-1; its
+// eigenvectors with eigenvalues below 1 span the held part. A Gaussian prior is held whole.
+struct PriorParts {
+  Eigen::Matrix3d held = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d yielding = Eigen::Matrix3d::Zero();
+};
+
+PriorParts SplitPrior(const ShiftedPrior& prior, const Eigen::Matrix3d& sample_information) {
+  PriorParts parts;
+  if (prior.loss_sigmas <= 0.0) {
+    parts.held = prior.sqrt_information;
+    return parts;
+  }
+  const Eigen::Matrix3d S_inv = prior.sqrt_information.inverse();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(S_inv.transpose() *
+                                                            sample_information * S_inv);
+  const Eigen::Matrix3d rotated = eigen.eigenvectors().transpose() * prior.sqrt_information;
+  for (int i = 0; i < 3; ++i) {
+    (eigen.eigenvalues()(i) < 1.0 ? parts.held : parts.yielding).row(i) = rotated.row(i);
+  }
+  return parts;
+}
+
+// The yielding part's weight rho'(s) in the covariance, as the samples' weights: the Cauchy
+// loss's 1 / (1 + s / c^2) at its squared whitened distance s from the prior.
+double YieldingWeight(const ShiftedPrior& prior, const PriorParts& parts, const double* pose) {
+  if (prior.loss_sigmas <= 0.0) return 0.0;
+  const Eigen::Vector3d d(pose[0] - prior.mean.x, pose[1] - prior.mean.y,
+                          NormalizeAngle(pose[2] - prior.mean.theta));
+  const double s = (parts.yielding * d).squaredNorm();
+  return 1.0 / (1.0 + s / (prior.loss_sigmas * prior.loss_sigmas));
+}
+
 // One Ceres solve of the associated samples (and the prior) starting at T_map_scan. The pose
 // parameters are relative to `origin` so that the solver's relative tolerances and the
 // residuals stay accurate far from the map origin.
@@ -161,7 +203,9 @@ SolveOutcome Solve(const std::vector<Association>& associations,
   problem_options.disable_all_safety_checks = true;
   // The costs outlive the problem, which does not own them.
   std::deque<internal::PointToSegmentCost> sample_costs;  // stable addresses, few allocations
-  std::unique_ptr<ceres::CostFunction> prior_cost;
+  std::unique_ptr<ceres::CostFunction> held_cost, yielding_cost;
+  std::optional<ceres::CauchyLoss> prior_loss;  // heavy-tailed prior (PosePrior::loss_sigmas)
+  PriorParts parts;
   ceres::Problem problem(problem_options);
   std::vector<ceres::CostFunction*> costs;
   std::vector<ceres::LossFunction*> losses;
@@ -175,8 +219,16 @@ SolveOutcome Solve(const std::vector<Association>& associations,
     problem.AddResidualBlock(costs.back(), losses.back(), pose);
   }
   if (prior) {
-    prior_cost.reset(internal::PosePriorCost::Create(prior->mean, prior->sqrt_information));
-    problem.AddResidualBlock(prior_cost.get(), nullptr, pose);
+    parts = SplitPrior(*prior, prior->loss_sigmas > 0.0
+                                   ? SampleInformation(costs, losses, pose, params.point_sigma_m).first
+                                   : Eigen::Matrix3d::Zero());
+    held_cost.reset(internal::PosePriorCost::Create(prior->mean, parts.held));
+    problem.AddResidualBlock(held_cost.get(), nullptr, pose);
+    if (prior->loss_sigmas > 0.0) {
+      prior_loss.emplace(prior->loss_sigmas);
+      yielding_cost.reset(internal::PosePriorCost::Create(prior->mean, parts.yielding));
+      problem.AddResidualBlock(yielding_cost.get(), &*prior_loss, pose);
+    }
   }
   ceres::Solver::Summary summary;
   ceres::Solve(SolverOptions(params), &problem, &summary);
@@ -185,7 +237,11 @@ SolveOutcome Solve(const std::vector<Association>& associations,
   outcome.converged = summary.termination_type == ceres::CONVERGENCE;
   std::tie(outcome.information, outcome.rms_error_m) =
       SampleInformation(costs, losses, pose, params.point_sigma_m);
-  if (prior) outcome.information += prior->sqrt_information.transpose() * prior->sqrt_information;
+  if (prior) {
+    outcome.information += parts.held.transpose() * parts.held +
+                           YieldingWeight(*prior, parts, pose) * parts.yielding.transpose() *
+                               parts.yielding;
+  }
   return outcome;
 }
 

@@ -121,7 +121,8 @@ class TrackingSearch {
         growth_(odometry_delta ? 1.0 : std::min(1.0 + lost_scans, params.max_lost_growth)) {
     if (odometry_delta) {
       guess_ = Pose2();  // the model is already seen from the odometry prediction
-      prior_ = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise)};
+      prior_ = PosePrior{Pose2(), OdometryCovariance(*odometry_delta, params.odometry_noise),
+                         params.odometry_noise.loss_sigmas};
     }
     all_ = model.map;
     all_.insert(all_.end(), model.recent_fine.begin(), model.recent_fine.end());
@@ -267,7 +268,8 @@ Localization TrackKeyframe(const Shapes& shapes, const std::vector<Polyline>& ke
       AlignmentSamples(shapes.fine, params.matcher.alignment.sample_spacing_m);
   if (samples.empty() || keyframe_fine.empty()) return loc;
   const CandidateSelector selector(keyframe_fine, SelectionFor(params));
-  const PosePrior prior{Pose2(), OdometryCovariance(odometry_delta, params.odometry_noise)};
+  const PosePrior prior{Pose2(), OdometryCovariance(odometry_delta, params.odometry_noise),
+                       params.odometry_noise.loss_sigmas};
   FastTrack(samples, keyframe_fine, selector, prior, params.keyframe_track_min_fit, params, loc);
   return loc;  // FastTrack sets nothing when it falls short
 }

@@ -36,6 +36,7 @@ void OdometryNoiseParams::Validate() const {
   if (!(learn_max_scale >= learn_min_scale)) {
     throw std::invalid_argument("OdometryNoiseParams::learn_max_scale must be >= learn_min_scale");
   }
+  internal::NonNegative(loss_sigmas, "OdometryNoiseParams::loss_sigmas");
 }
 
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {

@@ -247,6 +247,57 @@ TEST(RefineAlignmentTest, PriorPullsTheUnconstrainedAxis) {
   EXPECT_NEAR(without.T_map_scan.y, kTruth.y, 0.005);
 }
 
+// A prior 10 standard deviations off (an odometry glitch) against a scan that fixes every
+// axis: the Gaussian prior drags the pose centimetres away from the walls; the heavy-tailed one
+// (Cauchy, 3 sigmas) barely moves it, and its information then counts little in the
+// covariance. Within its scale the heavy-tailed prior acts as the Gaussian one does.
+TEST(RefineAlignmentTest, HeavyTailedPriorYieldsToAClearScan) {
+  std::mt19937 prng(42);
+  const std::vector<Polyline> scene = test::CorridorWithDoorsScene();
+  const std::vector<Point2> samples =
+      AllSamples(test::MakePairs(test::Perceive(scene, kTruth, 0.01, prng), scene));
+  const Eigen::Matrix3d covariance =
+      Eigen::Vector3d(0.01 * 0.01, 0.01 * 0.01, std::pow(0.3 * kDeg, 2)).asDiagonal();
+  const auto refine = [&](const Pose2& prior_mean, double loss_sigmas) {
+    return RefineAlignment(samples, scene, kTruth, PosePrior{prior_mean, covariance, loss_sigmas});
+  };
+  const Pose2 glitch(kTruth.x + 0.1, kTruth.y - 0.1, kTruth.theta + 3.0 * kDeg);
+  const RefinementResult gaussian = refine(glitch, 0.0);
+  const RefinementResult heavy = refine(glitch, 3.0);
+  const RefinementResult data_only = RefineAlignment(samples, scene, kTruth, std::nullopt);
+  ASSERT_TRUE(gaussian.converged);
+  ASSERT_TRUE(heavy.converged);
+  ASSERT_TRUE(data_only.converged);
+  EXPECT_THAT(gaussian.T_map_scan, ::testing::Not(IsNearly(data_only.T_map_scan, 0.004, 1.0 * kDeg)));
+  EXPECT_THAT(heavy.T_map_scan, IsNearly(data_only.T_map_scan, 0.001, 0.02 * kDeg));
+  EXPECT_THAT(heavy.T_map_scan, IsNearly(kTruth, 0.003, 0.05 * kDeg));
+  EXPECT_NEAR(heavy.covariance(0, 0), data_only.covariance(0, 0), 0.2 * data_only.covariance(0, 0));
+  // One standard deviation off: the two priors agree within a millimetre.
+  const Pose2 near(kTruth.x + 0.01, kTruth.y, kTruth.theta + 0.3 * kDeg);
+  EXPECT_THAT(refine(near, 3.0).T_map_scan, IsNearly(refine(near, 0.0).T_map_scan, 0.001, 0.02 * kDeg));
+  EXPECT_THROW(refine(glitch, -1.0), std::invalid_argument);
+  EXPECT_THROW(refine(glitch, std::nan("")), std::invalid_argument);
+}
+
+// Along a corridor of straight walls the scan says nothing, so there the heavy-tailed prior
+// stays whole even when it is far off across the corridor (a heading glitch): x and its
+// variance are the prior's, y and theta the walls'.
+TEST(RefineAlignmentTest, HeavyTailedPriorHoldsWhereTheScanIsBlind) {
+  std::mt19937 prng(42);
+  const std::vector<Polyline> scene = test::StraightCorridorScene();
+  const std::vector<Point2> samples =
+      AllSamples(test::MakePairs(test::Perceive(scene, kTruth, 0.01, prng), scene));
+  const PosePrior prior{Pose2(kTruth.x + 0.1, kTruth.y - 0.1, kTruth.theta - 3.0 * kDeg),
+                        Eigen::Vector3d(0.01 * 0.01, 0.01 * 0.01, std::pow(0.3 * kDeg, 2)).asDiagonal(),
+                        3.0};
+  const RefinementResult heavy = RefineAlignment(samples, scene, kTruth, prior);
+  ASSERT_TRUE(heavy.converged);
+  EXPECT_NEAR(heavy.T_map_scan.x, prior.T_map_scan.x, 1e-3);
+  EXPECT_NEAR(heavy.T_map_scan.y, kTruth.y, 0.003);
+  EXPECT_NEAR(heavy.T_map_scan.theta, kTruth.theta, 0.05 * kDeg);
+  EXPECT_NEAR(heavy.covariance(0, 0), 0.01 * 0.01, 0.1 * 0.01 * 0.01);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Robustness
 
