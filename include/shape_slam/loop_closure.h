@@ -30,6 +30,9 @@
 #include "shape_slam/types.h"
 
 namespace shape_slam {
+namespace internal {
+struct RegistrationResult;  // internal/registration.h
+}
 
 struct LoopClosureParams {
   bool enabled = true;
@@ -239,7 +242,7 @@ class LoopCloser {
   std::optional<RefinementResult> Refine(const Sides& sides, const RankedCandidate& candidate) const;
   /// The closure a refined match implies, if it passes the verification (both sides explain
   /// each other, every direction constrained, correction within the uncertainty).
-  std::optional<LoopClosure> Verify(const Sides& sides, const RefinementResult& refined,
+  std::optional<LoopClosure> Verify(const Sides& sides, const internal::RegistrationResult& registered,
                                     const PoseGraph& graph) const;
   double SearchRadius(double graph_distance_m) const;
   double CorrectionBoundM(double graph_distance_m) const;

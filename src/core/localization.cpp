@@ -61,13 +61,12 @@ CandidateSelectionParams SelectionFor(const ShapeSlamParams& params) {
 }
 
 // The estimate of a refinement, with its fit (inlier ratio) to the model.
-void Take(const RefinementResult& refined, double fit, const ShapeSlamParams& params,
-          Localization& loc) {
-  loc.correction = refined.T_map_scan;
-  loc.covariance = refined.covariance;
-  loc.rms_error_m = refined.rms_error_m;
-  loc.inlier_ratio = fit;
-  loc.trusted = fit >= params.min_inlier_ratio;
+void Take(const RegistrationResult& registered, const ShapeSlamParams& params, Localization& loc) {
+  loc.correction = registered.T_model_scan;
+  loc.covariance = registered.covariance;
+  loc.rms_error_m = registered.rms_error_m;
+  loc.inlier_ratio = registered.fit;
+  loc.trusted = registered.fit >= params.min_inlier_ratio;
 }
 
 // The fast track (with odometry, not in the paper; ShapeSlamParams::fast_track_min_fit): the
@@ -87,7 +86,7 @@ bool FastTrack(const std::vector<Point2>& samples, const std::vector<Polyline>& 
       RefineAlignment(samples, model, fast.front().T_model_scan, prior, params.refinement);
   const double fit = refined.converged ? selector.Fit(samples, refined.T_map_scan) : 0.0;
   if (fit < min_fit || !near_prediction(refined.T_map_scan)) return false;
-  Take(refined, fit, params, loc);
+  Take(ToResult(fast.front(), refined, fit), params, loc);
   loc.fast_track = true;
   return true;
 }
@@ -167,11 +166,9 @@ class TrackingSearch {
       if (!refined.converged || !Accept(refined.T_map_scan)) return std::nullopt;
       return refined;
     };
-    const auto selected = SelectRefined<RefinementResult>(
-        selector_->Rank(samples_, candidates, reference_, accept), selection_.max_refinements, refine);
-    if (!selected) return;
-    const RefinementResult& refined = selected->second;
-    Take(refined, selector_->Fit(samples_, refined.T_map_scan), params_, loc);
+    const RegistrationResult registered = RegisterCandidates(
+        samples_, *selector_, candidates, reference_, selection_.max_refinements, refine, accept);
+    if (registered.converged) Take(registered, params_, loc);
   }
 
   /// Unconfirmed: the prediction, which without odometry is the constant-velocity one (a robot

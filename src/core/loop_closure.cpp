@@ -355,13 +355,14 @@ std::optional<RefinementResult> LoopCloser::Refine(const Sides& sides,
   return refined;
 }
 
-std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides, const RefinementResult& refined,
+std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides,
+                                              const internal::RegistrationResult& registered,
                                               const PoseGraph& graph) const {
   // Verification: both sides explain each other ...
   LoopClosure loop;
-  loop.inlier_ratio = sides.selector.Fit(sides.samples, refined.T_map_scan);
+  loop.inlier_ratio = registered.fit;
   std::vector<Point2> place_in_scan;
-  const PointTransform T_scan_old(refined.T_map_scan.Inverse());
+  const PointTransform T_scan_old(registered.T_model_scan.Inverse());
   for (const Point2& q : sides.place_samples) place_in_scan.push_back(T_scan_old(q));
   loop.reverse_inlier_ratio = VisibleInlierRatio(place_in_scan, sides.samples, sides.scan_grid);
   if (loop.inlier_ratio < params_.min_inlier_ratio ||
@@ -369,7 +370,7 @@ std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides, const Refineme
     return std::nullopt;
   }
   // ... the match constrains every direction (not along a featureless corridor) ...
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(refined.covariance.topLeftCorner<2, 2>());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(registered.covariance.topLeftCorner<2, 2>());
   if (std::sqrt(std::max(0.0, xy.eigenvalues().maxCoeff())) > params_.max_match_sigma_m) {
     return std::nullopt;
   }
@@ -377,8 +378,8 @@ std::optional<LoopClosure> LoopCloser::Verify(const Sides& sides, const Refineme
   // by 180 deg, a parallel corridor far off are not).
   const Pose2 T_old_now = graph.Node(sides.then.node).Inverse() * graph.Node(sides.now.node);
   loop.edge = {sides.then.node, sides.now.node,
-               sides.then.T_robot_sensor * refined.T_map_scan * sides.now.T_robot_sensor.Inverse(),
-               EdgeCovariance(refined.covariance, params_), true};
+               sides.then.T_robot_sensor * registered.T_model_scan * sides.now.T_robot_sensor.Inverse(),
+               EdgeCovariance(registered.covariance, params_), true};
   loop.correction = T_old_now.Inverse() * loop.edge.T_from_to;
   loop.old_keyframe = sides.old;
   loop.new_keyframe = sides.current;
@@ -399,7 +400,10 @@ std::optional<LoopClosure> LoopCloser::QuickMatch(const Sides& sides, const Pose
   if (quick.empty() || quick.front().fit < params_.quick_min_fit) return std::nullopt;
   const std::optional<RefinementResult> refined = Refine(sides, quick.front());
   if (!refined) return std::nullopt;
-  std::optional<LoopClosure> loop = Verify(sides, *refined, graph);
+  std::optional<LoopClosure> loop = Verify(
+      sides,
+      internal::ToResult(quick.front(), *refined, sides.selector.Fit(sides.samples, refined->T_map_scan)),
+      graph);
   if (loop && loop->inlier_ratio >= params_.quick_min_fit) return loop;
   return std::nullopt;
 }
@@ -439,10 +443,10 @@ std::optional<LoopClosure> LoopCloser::FullMatch(const Sides& sides, const PoseG
     if (c.fit < params_.refine_min_fit) return std::nullopt;
     return Refine(sides, c);
   };
-  const auto selected = SelectRefined<RefinementResult>(
-      sides.selector.Rank(sides.samples, candidates, estimate), match_.selection.max_refinements, refine);
-  if (!selected) return std::nullopt;
-  return Verify(sides, selected->second, graph);
+  const internal::RegistrationResult registered = internal::RegisterCandidates(
+      sides.samples, sides.selector, candidates, estimate, match_.selection.max_refinements, refine);
+  if (!registered.converged) return std::nullopt;
+  return Verify(sides, registered, graph);
 }
 
 std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& keyframes,

@@ -44,4 +44,33 @@ std::vector<Point2> Thinned(const std::vector<Point2>& samples, double from_m, d
   return thinned;
 }
 
+RegistrationResult ToResult(const RankedCandidate& candidate, const RefinementResult& refined,
+                            double fit) {
+  RegistrationResult result;
+  result.T_model_scan = refined.T_map_scan;
+  result.covariance = refined.covariance;
+  result.fit = fit;
+  result.converged = true;
+  result.candidate = candidate.index;
+  result.rms_error_m = refined.rms_error_m;
+  result.iterations = refined.iterations;
+  return result;
+}
+
+RegistrationResult RegisterCandidates(
+    const std::vector<Point2>& samples, const CandidateSelector& selector,
+    const std::vector<Pose2>& candidates, const Pose2& reference, int max_refinements,
+    const std::function<std::optional<RefinementResult>(const RankedCandidate&)>& refine,
+    const std::function<bool(const Pose2&)>& accept) {
+  const auto selected = SelectRefined<RefinementResult>(
+      selector.Rank(samples, candidates, reference, accept), max_refinements, refine);
+  if (!selected) {
+    RegistrationResult none;
+    none.T_model_scan = reference;
+    return none;
+  }
+  const auto& [candidate, refined] = *selected;
+  return ToResult(candidate, refined, selector.Fit(samples, refined.T_map_scan));
+}
+
 }  // namespace shape_slam::internal

@@ -112,19 +112,18 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
     if (!refined.converged) return std::nullopt;
     return refined;
   };
-  const auto selected = SelectRefined<RefinementResult>(
-      selector.Rank(samples, candidates, reference), selection.max_refinements, refine);
-  if (!selected) return result;
-  const RefinementResult& refined = selected->second;
-  result.T_i_j = to_robot(refined.T_map_scan);
+  const internal::RegistrationResult registered = internal::RegisterCandidates(
+      samples, selector, candidates, reference, selection.max_refinements, refine);
+  if (!registered.converged) return result;
+  result.T_i_j = to_robot(registered.T_model_scan);
   // Covariance of the robot pose: the sensor offsets are constant, so it transforms with the
   // rotation of scan I's sensor on the robot.
   Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
   J.topLeftCorner<2, 2>() = scan_i.T_robot_sensor.Rotation();
-  result.covariance = J * refined.covariance * J.transpose();
-  result.iterations = refined.iterations;
-  result.rms_error_m = refined.rms_error_m;
-  result.inlier_ratio = selector.Fit(samples, refined.T_map_scan);
+  result.covariance = J * registered.covariance * J.transpose();
+  result.iterations = registered.iterations;
+  result.rms_error_m = registered.rms_error_m;
+  result.inlier_ratio = registered.fit;
   result.converged = result.inlier_ratio >= params.min_inlier_ratio;
   return result;
 }

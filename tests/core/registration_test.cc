@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "pose_matchers.h"
+#include "shape_slam/candidate_selection.h"
 #include "shape_slam/scan_shapes.h"
 #include "test_scenes.h"
 
@@ -113,6 +114,65 @@ TEST(RegistrationTest, RefinementFindsTheBruteForceOptimum) {
     EXPECT_GT(internal::InlierRatio(samples, grid, refined.T_map_scan), 0.9);
     EXPECT_LT(internal::InlierRatio(samples, grid, k.T_world_sensor * k.offset), 0.6);
   }
+}
+
+// RegisterCandidates: the candidates ranked by fit (a far look-alike loses to the true pose),
+// refined in that order until the stage's check accepts one; the result names the candidate
+// that won, its fit and covariance. None accepted: not converged, at the reference.
+TEST(RegistrationTest, RegisterCandidatesTakesTheFirstAcceptedInRankOrder) {
+  std::mt19937 prng(3);
+  const Scene scene = testing::OfficeRoom();
+  const Pose2 truth(2.5, 2.0, 0.3);
+  const LaserScan scan = testing::SimulateScan(scene, truth, testing::ScannerModel{}, prng);
+  const std::vector<Point2> samples =
+      internal::AlignmentSamples(ExtractScanShapes(scan, ScanShapesParams{}).fine, 0.10);
+  std::vector<Polyline> model;
+  for (const testing::Wall& w : scene) model.push_back({w.a, w.b});
+  const CandidateSelector selector(model, CandidateSelectionParams{});
+  const std::vector<Pose2> candidates = {Pose2(4.5, 0.5, 2.0), truth * Pose2(0.1, -0.1, 0.05)};
+  int refinements = 0;
+  const auto refine = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    ++refinements;
+    const RefinementResult r = internal::RefineAgainstMap(samples, model, c.T_model_scan,
+                                                          std::nullopt, RefinementParams{}, 0.6);
+    if (!r.converged) return std::nullopt;
+    return r;
+  };
+  const internal::RegistrationResult best =
+      internal::RegisterCandidates(samples, selector, candidates, Pose2(), 6, refine);
+  ASSERT_TRUE(best.converged);
+  EXPECT_EQ(best.candidate, 1);
+  EXPECT_EQ(refinements, 1);
+  EXPECT_THAT(best.T_model_scan, IsNearly(truth, 0.02, 0.5 * kDeg));
+  EXPECT_DOUBLE_EQ(best.fit, selector.Fit(samples, best.T_model_scan));
+  EXPECT_GT(best.fit, 0.9);
+  EXPECT_LT(best.covariance(0, 0), 1e-3);
+  EXPECT_EQ(best.reverse_fit, -1.0);
+
+  // The stage refuses the better candidate: the other one is refined next and, with a check
+  // that accepts anything else, wins.
+  const auto refuse_first = [&](const RankedCandidate& c) -> std::optional<RefinementResult> {
+    if (c.index == 1) return std::nullopt;
+    return internal::RefineAgainstMap(samples, model, c.T_model_scan, std::nullopt,
+                                      RefinementParams{}, 0.6);
+  };
+  const internal::RegistrationResult second =
+      internal::RegisterCandidates(samples, selector, candidates, Pose2(), 6, refuse_first);
+  EXPECT_EQ(second.candidate, 0);
+  EXPECT_LT(second.fit, best.fit);
+
+  // At most max_refinements are refined; none accepted: not converged, at the reference.
+  const Pose2 reference(1.0, 1.0, 0.0);
+  const internal::RegistrationResult none =
+      internal::RegisterCandidates(samples, selector, candidates, reference, 1, refuse_first);
+  EXPECT_FALSE(none.converged);
+  EXPECT_EQ(none.candidate, -1);
+  EXPECT_THAT(none.T_model_scan, IsNearly(reference, 1e-12, 1e-12));
+  // `accept` drops candidates before ranking.
+  const internal::RegistrationResult only_far = internal::RegisterCandidates(
+      samples, selector, candidates, Pose2(), 6, refine,
+      [&](const Pose2& T) { return (T.Translation() - truth.Translation()).norm() > 1.0; });
+  EXPECT_NE(only_far.candidate, 1);
 }
 
 TEST(RegistrationTest, ThinnedKeepsEveryKthSample) {

@@ -1,19 +1,54 @@
-// Internal (not installed): the building blocks of registering a scan against a model, shared
-// by every stage that does it -- per-scan tracking (internal/localization.h), loop closure
-// (loop_closure.h), scan-to-scan matching (scan_matcher.h) and the localizer (localizer.h).
+// Internal (not installed): registering a scan against a model (RegisterCandidates, one
+// RegistrationResult) and its building blocks, shared by every stage that does it -- per-scan
+// tracking (internal/localization.h), loop closure (loop_closure.h), scan-to-scan matching
+// (scan_matcher.h) and the localizer (localizer.h, through the per-scan tracking).
 // The scan enters as samples of its alignment polylines (§5.1, 10 cm apart), the model as
 // polylines; nothing here knows the mapper, so these stages include this header, not
 // pipeline.h.
 #pragma once
 
+#include <functional>
 #include <optional>
 #include <vector>
 
 #include "shape_slam/alignment_refinement.h"
+#include "shape_slam/candidate_selection.h"
 #include "shape_slam/internal/model_segments.h"
 #include "shape_slam/types.h"
 
 namespace shape_slam::internal {
+
+/// What a registration of a scan against a model found: the one result every stage reads
+/// (tracking, loop closure, `match`, the localizer).
+struct RegistrationResult {
+  Pose2 T_model_scan;  ///< the scan's pose in the model frame (the start when not converged)
+  /// Covariance of (x, y, theta) of T_model_scan (RefinementResult::covariance).
+  Eigen::Matrix3d covariance = kUnconstrainedVariance * Eigen::Matrix3d::Identity();
+  double fit = 0.0;  ///< scan -> model: fraction of the scan's samples within inlier distance
+  /// model -> scan: fraction of the model's samples the scan explains, when the stage measures
+  /// it (loop closure's verification); -1 otherwise.
+  double reverse_fit = -1.0;
+  bool converged = false;  ///< a candidate's refinement was accepted
+  int candidate = -1;      ///< which candidate won: its index in the candidates given
+  double rms_error_m = 0.0;
+  int iterations = 0;      ///< outer iterations of the winning refinement
+};
+
+/// A refined candidate (and the candidate it came from) as a RegistrationResult, with its fit.
+RegistrationResult ToResult(const RankedCandidate& candidate, const RefinementResult& refined,
+                            double fit);
+
+/// The registration shared by every stage: each candidate pose finished by the selector's
+/// quick ICP and ranked (candidate_selection.h: best fit, then nearest `reference` among equal
+/// fits; candidates that `accept` refuses are dropped), then refined in that order, at most
+/// max_refinements of them, by `refine`, which returns nullopt when the stage's own checks
+/// (prior, gates, convergence) refuse the estimate. The first accepted one wins; converged is
+/// false when none is.
+RegistrationResult RegisterCandidates(
+    const std::vector<Point2>& samples, const CandidateSelector& selector,
+    const std::vector<Pose2>& candidates, const Pose2& reference, int max_refinements,
+    const std::function<std::optional<RefinementResult>(const RankedCandidate&)>& refine,
+    const std::function<bool(const Pose2&)>& accept = nullptr);
 
 /// Samples of the alignment polylines every spacing_m (§5.1).
 std::vector<Point2> AlignmentSamples(const std::vector<Polyline>& fine, double spacing_m);
