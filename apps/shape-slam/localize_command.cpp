@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <iomanip>
 #include <iostream>
+#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -44,7 +45,11 @@ ArgParser MakeParser() {
           "Outputs (written atomically into DIR, only after a successful run):\n"
           "  trajectory.tum   one line per localized scan: timestamp x y z qx qy qz qw\n"
           "  stats.json       scans, localized fraction, first localized scan, lost and\n"
-          "                   recovered events, per-scan times, status counts\n\n"
+          "                   recovered events, per-scan times, status counts\n"
+          "  status.csv       one row per scan: scan, timestamp, status (searching,\n"
+          "                   ambiguous, tracking, lost), localized, matched, x y theta (the\n"
+          "                   pose or best hypothesis; empty without one), inlier_ratio,\n"
+          "                   hypotheses, lost_event, recovered_event, ms\n\n"
           "Example:\n"
           "  shape-slam run intel.log.gz --out intel-out\n"
           "  shape-slam localize intel-out/map.polylines intel.log.gz --out intel-loc");
@@ -53,6 +58,7 @@ ArgParser MakeParser() {
 
 struct LocalizeOutput {
   std::vector<StampedPose> trajectory;  // localized scans only
+  std::string status_csv;               // one row per scan
   std::vector<double> scan_ms;
   std::size_t scans = 0, localized = 0, matched = 0;
   long long first_localized = -1;
@@ -61,8 +67,29 @@ struct LocalizeOutput {
   double processing_s = 0.0;
 };
 
+constexpr const char* kStatusHeader =
+    "scan,timestamp,status,localized,matched,x,y,theta,inlier_ratio,hypotheses,lost_event,"
+    "recovered_event,ms\n";
+
+// One status.csv row. Without a pose or hypothesis (searching with none yet) x, y, theta are
+// empty.
+std::string StatusRow(std::size_t scan, const LocalizerReport& r, double ms) {
+  std::ostringstream row;
+  row << std::setprecision(10) << scan << ',' << r.timestamp_s << ',' << ToString(r.status) << ','
+      << r.localized << ',' << r.matched << ',';
+  if (r.localized || r.hypotheses > 0) {
+    row << r.T_map_robot.x << ',' << r.T_map_robot.y << ',' << r.T_map_robot.theta;
+  } else {
+    row << ",,";
+  }
+  row << ',' << std::setprecision(4) << r.inlier_ratio << ',' << r.hypotheses << ','
+      << r.lost_event << ',' << r.recovered_event << ',' << ms << '\n';
+  return row.str();
+}
+
 LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& scans, bool quiet) {
   LocalizeOutput out;
+  out.status_csv = kStatusHeader;
   ProgressBar progress(scans.size(), "localizing", !quiet);
   const auto start = std::chrono::steady_clock::now();
   for (std::size_t i = 0; i < scans.size(); ++i) {
@@ -70,6 +97,7 @@ LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& 
     const LocalizerReport report = localizer.Process(scans[i]);
     const auto t1 = std::chrono::steady_clock::now();
     out.scan_ms.push_back(std::chrono::duration<double, std::milli>(t1 - t0).count());
+    out.status_csv += StatusRow(i, report, out.scan_ms.back());
     ++out.status_counts[static_cast<int>(report.status)];
     if (report.localized) {
       out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
@@ -166,13 +194,14 @@ int RunLocalize(const Args& args) {
                           io::FormatTum(out.trajectory));
   io::WriteFileAtomically((std::filesystem::path(out_dir) / "stats.json").string(),
                           StatsJson(out, map_path, *reader, initial.has_value(), wall_s));
+  io::WriteFileAtomically((std::filesystem::path(out_dir) / "status.csv").string(), out.status_csv);
   if (out.localized == 0) std::cerr << "warning: the robot was never localized in the map\n";
   if (!quiet) {
     std::cout << std::fixed << std::setprecision(2) << "localized " << out.localized << " of "
               << out.scans << " scans (" << 100.0 * LocalizedFraction(out) << " %), first at scan "
               << out.first_localized << ", lost " << out.lost_events << "x, recovered "
               << out.recovered_events << "x, median " << Percentile(out.scan_ms, 0.5)
-              << " ms/scan\noutputs in " << out_dir << "/ (trajectory.tum, stats.json)\n";
+              << " ms/scan\noutputs in " << out_dir << "/ (trajectory.tum, stats.json, status.csv)\n";
   }
   return 0;
 }

@@ -141,13 +141,23 @@ map_sum=$(cksum <"$WORK/moving/map.polylines")
 expect 0 "localized [0-9]+ of 3 scans" -- "$BIN" localize "$WORK/moving/map.polylines" "$LOG" \
   --out "$WORK/loc"
 [ "$(cksum <"$WORK/moving/map.polylines")" = "$map_sum" ] || fail "localize changed the map file"
-python3 - "$WORK/loc/stats.json" "$WORK/loc/trajectory.tum" <<'PY' || fail "localize stats.json not sane"
-import json, sys
+python3 - "$WORK/loc/stats.json" "$WORK/loc/trajectory.tum" "$WORK/loc/status.csv" <<'PY' || fail "localize outputs not sane"
+import csv, json, sys
 d = json.load(open(sys.argv[1]))
 assert d["scans"] == 3 and d["localized_scans"] >= 1 and 0 <= d["first_localized_scan"] <= 1, d
 assert d["lost_events"] == 0 and d["per_scan_ms"]["median"] > 0, d
 poses = [l for l in open(sys.argv[2]) if l.strip() and not l.startswith("#")]
 assert len(poses) == d["localized_scans"], (len(poses), d)
+# status.csv: one row per scan, its status and localized flag as stats.json counts them, and
+# the pose of each localized row the trajectory's.
+rows = list(csv.DictReader(open(sys.argv[3])))
+assert [int(r["scan"]) for r in rows] == [0, 1, 2], rows
+for name, count in d["status_counts"].items():
+    assert sum(r["status"] == name for r in rows) == count, (name, rows)
+localized = [r for r in rows if r["localized"] == "1"]
+assert len(localized) == d["localized_scans"] and all(r["status"] == "tracking" for r in localized), rows
+for r, p in zip(localized, poses):
+    assert abs(float(r["x"]) - float(p.split()[1])) < 1e-6 and abs(float(r["y"]) - float(p.split()[2])) < 1e-6, (r, p)
 PY
 read -r _ x y _ _ _ qz qw < <(grep -v '^#' "$WORK/moving/trajectory.tum" | head -n 1)
 theta=$(python3 -c "import math; print(2 * math.atan2($qz, $qw))")
