@@ -9,8 +9,11 @@
 //   lost       tracking failed (several scans without a trusted match, or a sudden drop of
 //              the fit: the kidnapped robot); the global search runs again until it recovers
 //
-// The global search is the window search (window_search.h) from a grid of centres covering the
-// whole map, all turns, its poses verified by the candidate selection and refinement of the per-scan localization.
+// The global search is one branch and bound over every translation of the map and all turns
+// (WindowSearch::SearchMap, window_search.h) on the map's likelihood field and pyramid, built
+// once when the map is loaded; it stops when no unexplored pose can beat the best few or at a
+// bound on its work, and its poses are verified by the candidate selection and refinement of
+// the per-scan localization.
 // Hypotheses are ranked by an evidence score, a decaying sum of the samples they explain.
 // Deterministic: the same map, scans and parameters give bit-identical results.
 #pragma once
@@ -35,9 +38,8 @@ struct LocalizerParams {
   double min_inlier_ratio = 0.5;
   /// A hypothesis of the global search is accepted as the pose once its fit reaches this.
   double min_global_fit = 0.6;
-  /// Global search: the window search (all turns) from centres on a grid covering the map,
-  /// every 2 * global_tile_half_m; one window over the whole map would need a field far
-  /// coarser than the map's detail (its padding grows with the window). Metres.
+  /// Global search: its coarsest nodes, which tile the map, are about 2 * global_tile_half_m
+  /// wide (the pyramid's top level). Metres.
   double global_tile_half_m = 3.0;
   /// Cell size and likelihood width of the global search's field, metres (coarse: the
   /// verification refines the poses).
@@ -45,8 +47,9 @@ struct LocalizerParams {
   double global_hit_sigma_m = 0.2;
   /// The global search's angular step moves samples at this range by one cell (metres).
   double global_max_step_range_m = 8.0;
-  /// Search nodes scored per window centre.
-  int global_node_evaluations = 30000;
+  /// Bound on the global search's work: search nodes scored (each costs one look-up per
+  /// sample), which bounds its time (about 0.1-0.2 s on the development maps).
+  int global_node_evaluations = 300000;
   /// At most this many poses of the global search (best fit first, distinct) are verified.
   int global_hypotheses = 8;
   /// Hypotheses kept between scans while ambiguous.
@@ -138,8 +141,7 @@ class Localizer {
   LocalizerParams params_;
   PolylineMap map_;
   std::vector<Polyline> walls_;  // every map polyline, map frame
-  WindowSearch global_search_;
-  std::vector<Pose2> tile_centres_;  // window centres of the global search, map frame
+  WindowSearch global_search_;  // the map's likelihood field and pyramid, built once
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   LocalizerStatus status_ = LocalizerStatus::kSearching;
   bool was_localized_ = false;

@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <queue>
 #include <vector>
 
 #include "shape_slam/types.h"
@@ -78,6 +79,13 @@ class WindowSearch {
   std::vector<WindowHypothesis> Search(const std::vector<Point2>& samples_scan,
                                        const Pose2& T_model_scan_centre) const;
 
+  /// The best distinct poses over the whole model, every translation and all turns, best
+  /// first: one branch and bound over the field built at construction (its top level is the
+  /// window's), so the places that explain the scan poorly are cut early wherever they are.
+  /// For a global search (localization without a pose); half_window_m and half_window_rad are
+  /// not used, the other params are.
+  std::vector<WindowHypothesis> SearchMap(const std::vector<Point2>& samples_scan) const;
+
   /// Mean likelihood of the samples at a pose (the fit of WindowHypothesis).
   double Fit(const std::vector<Point2>& samples_scan, const Pose2& T_model_scan) const;
 
@@ -86,6 +94,29 @@ class WindowSearch {
 
  private:
   struct Node;
+  struct CellRange {
+    int x0, x1, y0, y1;  // translation offsets searched, cells, inclusive
+  };
+  // One search's samples at every rotation, its penalties and its node bounds.
+  class Scorer {
+   public:
+    Scorer(const WindowSearch& search, const std::vector<Point2>& samples_scan,
+           const Pose2& centre, const CellRange& range, double half_window_rad);
+    float Bound(int r, int level, int tx, int ty) const;
+    std::priority_queue<Node> TopNodes() const;
+    std::vector<Node> Children(const Node& node) const;
+    WindowHypothesis Leaf(const Node& node) const;
+    mutable int evaluations = 0;
+
+   private:
+    const WindowSearch& search_;
+    Pose2 centre_;
+    CellRange range_;
+    int n_ = 0, rotations_ = 0, half_rotations_ = 0;
+    double step_rad_ = 0.0, cell_penalty_ = 0.0, to_score_ = 0.0;
+    std::vector<int> cells_;
+    std::vector<double> rotation_penalty_;
+  };
   int LevelValue(int level, int ix, int iy) const;
   std::vector<int> RotatedCells(const std::vector<Point2>& samples_scan, const Pose2& centre,
                                 int rotations, int half_rotations, double step_rad) const;

@@ -42,25 +42,11 @@ std::vector<Polyline> MapWalls(const PolylineMap& map) {
 }
 
 // Window centres on a grid covering the map's bounding box, 2 * tile_half_m apart.
-std::vector<Pose2> TileCentres(const std::vector<Polyline>& walls, double tile_half_m) {
-  Point2 lo = Point2::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Polyline& w : walls) {
-    for (const Point2& p : w) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  }
-  const Point2 size = hi - lo;
-  const int nx = std::max(1, static_cast<int>(std::ceil(size.x() / (2.0 * tile_half_m))));
-  const int ny = std::max(1, static_cast<int>(std::ceil(size.y() / (2.0 * tile_half_m))));
-  std::vector<Pose2> centres;
-  for (int i = 0; i < nx; ++i) {
-    for (int j = 0; j < ny; ++j) {
-      centres.emplace_back(lo.x() + (i + 0.5) * size.x() / nx, lo.y() + (j + 0.5) * size.y() / ny,
-                           0.0);
-    }
-  }
-  return centres;
-}
-
 // The global search's window: one tile (with a cell of overlap), every turn, no prior.
+// The global search's field covers at most this many cells per side: 2048 at 0.2 m is a map
+// of 400 m without coarsening (memory: one byte per cell and pyramid level).
+constexpr int kGlobalMaxCellsPerSide = 2048;
+
 WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
   WindowSearchParams window = params.stages.window_search;
   window.resolution_m = params.global_resolution_m;
@@ -72,6 +58,7 @@ WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
   window.max_hypotheses = params.global_hypotheses;
   window.min_relative_score = 0.0;
   window.max_node_evaluations = params.global_node_evaluations;
+  window.max_cells_per_side = kGlobalMaxCellsPerSide;
   window.distinct_m = params.distinct_m;
   window.distinct_rad = params.distinct_rad;
   return window;
@@ -145,8 +132,7 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
     : params_(Validated(params)),
       map_(std::move(map)),
       walls_(MapWalls(map_)),
-      global_search_(walls_, GlobalSearchParams(params_)),
-      tile_centres_(TileCentres(walls_, params_.global_tile_half_m)) {}
+      global_search_(walls_, GlobalSearchParams(params_)) {}
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   hypotheses_ = {Hypothesis{T_map_robot, 1.0, 0.0, {}, 0}};
@@ -209,10 +195,7 @@ std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
   const double spacing = p.matcher.alignment.sample_spacing_m;
   const std::vector<Point2> samples = internal::Thinned(
       internal::AlignmentSamples(shapes.fine, spacing), spacing, p.window_search_spacing_m);
-  std::vector<WindowHypothesis> all;
-  for (const Pose2& centre : tile_centres_) {
-    for (const WindowHypothesis& h : global_search_.Search(samples, centre)) all.push_back(h);
-  }
+  std::vector<WindowHypothesis> all = global_search_.SearchMap(samples);
   std::stable_sort(all.begin(), all.end(), [](const WindowHypothesis& a, const WindowHypothesis& b) {
     return a.fit > b.fit;
   });

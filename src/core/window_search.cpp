@@ -174,72 +174,154 @@ std::vector<int> WindowSearch::RotatedCells(const std::vector<Point2>& samples_s
   return cells;
 }
 
-std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& samples_scan,
-                                                   const Pose2& T_model_scan_centre) const {
-  std::vector<WindowHypothesis> found;
-  if (samples_scan.empty() || pyramid_.empty()) return found;
-  const int n = static_cast<int>(samples_scan.size());
+namespace {
+
+// Adds a hypothesis to distinct ones kept best first: dropped when a better one lies within
+// distinct_m and distinct_rad of it, else it replaces the worse ones there; at most
+// max_hypotheses are kept.
+void AddDistinct(const WindowHypothesis& h, const WindowSearchParams& params,
+                 std::vector<WindowHypothesis>& found) {
+  const auto near = [&](const WindowHypothesis& f) {
+    return (f.T_model_scan.Translation() - h.T_model_scan.Translation()).norm() < params.distinct_m &&
+           std::abs(NormalizeAngle(f.T_model_scan.theta - h.T_model_scan.theta)) < params.distinct_rad;
+  };
+  for (const WindowHypothesis& f : found) {
+    if (near(f) && f.score >= h.score) return;
+  }
+  found.erase(std::remove_if(found.begin(), found.end(), near), found.end());
+  found.insert(std::upper_bound(found.begin(), found.end(), h,
+                                [](const WindowHypothesis& a, const WindowHypothesis& b) {
+                                  return a.score > b.score;
+                                }),
+               h);
+  if (static_cast<int>(found.size()) > params.max_hypotheses) found.pop_back();
+}
+
+}  // namespace
+
+WindowSearch::Scorer::Scorer(const WindowSearch& search, const std::vector<Point2>& samples_scan,
+                             const Pose2& centre, const CellRange& range, double half_window_rad)
+    : search_(search), centre_(centre), range_(range),
+      n_(static_cast<int>(samples_scan.size())) {
+  const WindowSearchParams& params = search.params_;
   double range_m = 1.0;
   for (const Point2& p : samples_scan) range_m = std::max(range_m, p.norm());
-  range_m = std::min(range_m, std::max(1.0, params_.max_step_range_m));
-  const double step_rad = resolution_m_ / range_m;
-  const bool full_turn = params_.half_window_rad >= M_PI;
-  const int half_rotations =
-      static_cast<int>(std::ceil(std::min(params_.half_window_rad, M_PI) / step_rad));
-  const int rotations = full_turn ? 2 * half_rotations : 2 * half_rotations + 1;
-  const int c = static_cast<int>(std::ceil(params_.half_window_m / resolution_m_));
-  const int top = levels_ - 1;
-
-  const std::vector<int> cells =
-      RotatedCells(samples_scan, T_model_scan_centre, rotations, half_rotations, step_rad);
-  std::vector<double> rotation_penalty(rotations);
-  for (int r = 0; r < rotations; ++r) {
-    const double e = (r - half_rotations) * step_rad / params_.prior_sigma_rad;
-    rotation_penalty[r] = params_.prior_weight * e * e;
+  range_m = std::min(range_m, std::max(1.0, params.max_step_range_m));
+  step_rad_ = search.resolution_m_ / range_m;
+  const bool full_turn = half_window_rad >= M_PI;
+  half_rotations_ = static_cast<int>(std::ceil(std::min(half_window_rad, M_PI) / step_rad_));
+  rotations_ = full_turn ? 2 * half_rotations_ : 2 * half_rotations_ + 1;
+  cells_ = search.RotatedCells(samples_scan, centre, rotations_, half_rotations_, step_rad_);
+  rotation_penalty_.resize(rotations_);
+  for (int r = 0; r < rotations_; ++r) {
+    const double e = (r - half_rotations_) * step_rad_ / params.prior_sigma_rad;
+    rotation_penalty_[r] = params.prior_weight * e * e;
   }
-  const double cell_penalty = params_.prior_weight * std::pow(resolution_m_ / params_.prior_sigma_m, 2);
-  const double to_score = 1.0 / (255.0 * n);
-  int evaluations = 0;
-  auto bound = [&](int r, int level, int tx, int ty) {
-    ++evaluations;
-    const int* rc = &cells[static_cast<std::size_t>(r) * n * 2];
-    long sum = 0;
-    for (int i = 0; i < n; ++i) sum += LevelValue(level, rc[2 * i] + tx, rc[2 * i + 1] + ty);
-    const int w = 1 << level;
-    const int gx = GapToZero(tx, std::min(tx + w - 1, c)), gy = GapToZero(ty, std::min(ty + w - 1, c));
-    return static_cast<float>(sum * to_score - rotation_penalty[r] - cell_penalty * (gx * gx + gy * gy));
-  };
+  cell_penalty_ = params.prior_weight * std::pow(search.resolution_m_ / params.prior_sigma_m, 2);
+  to_score_ = 1.0 / (255.0 * n_);
+}
 
+// Upper bound of the score of every pose of the node (exact at level 0).
+float WindowSearch::Scorer::Bound(int r, int level, int tx, int ty) const {
+  ++evaluations;
+  const int* rc = &cells_[static_cast<std::size_t>(r) * n_ * 2];
+  long sum = 0;
+  for (int i = 0; i < n_; ++i) sum += search_.LevelValue(level, rc[2 * i] + tx, rc[2 * i + 1] + ty);
+  const int w = 1 << level;
+  const int gx = GapToZero(tx, std::min(tx + w - 1, range_.x1));
+  const int gy = GapToZero(ty, std::min(ty + w - 1, range_.y1));
+  return static_cast<float>(sum * to_score_ - rotation_penalty_[r] - cell_penalty_ * (gx * gx + gy * gy));
+}
+
+std::priority_queue<WindowSearch::Node> WindowSearch::Scorer::TopNodes() const {
+  const int top = search_.levels_ - 1;
   std::priority_queue<Node> queue;
-  for (int r = 0; r < rotations; ++r) {
-    for (int tx = -c; tx <= c; tx += 1 << top) {
-      for (int ty = -c; ty <= c; ty += 1 << top) queue.push({bound(r, top, tx, ty), r, top, tx, ty});
+  for (int r = 0; r < rotations_; ++r) {
+    for (int tx = range_.x0; tx <= range_.x1; tx += 1 << top) {
+      for (int ty = range_.y0; ty <= range_.y1; ty += 1 << top) queue.push({Bound(r, top, tx, ty), r, top, tx, ty});
     }
   }
-  while (!queue.empty() && evaluations < params_.max_node_evaluations) {
+  return queue;
+}
+
+std::vector<WindowSearch::Node> WindowSearch::Scorer::Children(const Node& node) const {
+  std::vector<Node> children;
+  const int half = 1 << (node.level - 1);
+  for (const int dx : {0, half}) {
+    for (const int dy : {0, half}) {
+      if (node.tx + dx > range_.x1 || node.ty + dy > range_.y1) continue;
+      children.push_back({Bound(node.rotation, node.level - 1, node.tx + dx, node.ty + dy),
+                          node.rotation, node.level - 1, node.tx + dx, node.ty + dy});
+    }
+  }
+  return children;
+}
+
+WindowHypothesis WindowSearch::Scorer::Leaf(const Node& node) const {
+  const double dtheta = (node.rotation - half_rotations_) * step_rad_;
+  const Pose2 pose(centre_.x + node.tx * search_.resolution_m_, centre_.y + node.ty * search_.resolution_m_,
+                   NormalizeAngle(centre_.theta + dtheta));
+  const double penalty =
+      rotation_penalty_[node.rotation] + cell_penalty_ * (node.tx * node.tx + node.ty * node.ty);
+  return {pose, node.bound, node.bound + penalty};
+}
+
+std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& samples_scan,
+                                                   const Pose2& T_model_scan_centre) const {
+  if (samples_scan.empty() || pyramid_.empty()) return {};
+  const int c = static_cast<int>(std::ceil(params_.half_window_m / resolution_m_));
+  const Scorer scorer(*this, samples_scan, T_model_scan_centre, {-c, c, -c, c},
+                      params_.half_window_rad);
+  std::vector<WindowHypothesis> found;
+  std::priority_queue<Node> queue = scorer.TopNodes();
+  while (!queue.empty() && scorer.evaluations < params_.max_node_evaluations) {
     const Node node = queue.top();
     queue.pop();
     if (!found.empty() && node.bound < params_.min_relative_score * found.front().score) break;
     if (node.level > 0) {
-      const int half = 1 << (node.level - 1);
-      for (const int dx : {0, half}) {
-        for (const int dy : {0, half}) {
-          if (node.tx + dx > c || node.ty + dy > c) continue;
-          queue.push({bound(node.rotation, node.level - 1, node.tx + dx, node.ty + dy),
-                      node.rotation, node.level - 1, node.tx + dx, node.ty + dy});
-        }
-      }
+      for (const Node& child : scorer.Children(node)) queue.push(child);
       continue;
     }
-    const double dtheta = (node.rotation - half_rotations) * step_rad;
-    const Pose2 pose(T_model_scan_centre.x + node.tx * resolution_m_,
-                     T_model_scan_centre.y + node.ty * resolution_m_,
-                     NormalizeAngle(T_model_scan_centre.theta + dtheta));
-    if (SameAsBetter(found, pose, params_)) continue;
-    const double penalty =
-        rotation_penalty[node.rotation] + cell_penalty * (node.tx * node.tx + node.ty * node.ty);
-    found.push_back({pose, node.bound, node.bound + penalty});
+    const WindowHypothesis leaf = scorer.Leaf(node);
+    if (SameAsBetter(found, leaf.T_model_scan, params_)) continue;
+    found.push_back(leaf);
     if (static_cast<int>(found.size()) >= params_.max_hypotheses) break;
+  }
+  return found;
+}
+
+// Every translation of the field (its lower-left corner is the centre, offsets 0 .. n - 1
+// cells), all turns. Best first, but each node taken from the queue is followed down to a leaf
+// along its best child (its siblings queued), so that leaves, and with them a bound to cut by,
+// come early even when the top nodes of a large map all bound high; the search ends when no
+// queued node can beat the max_hypotheses-th best distinct leaf, or at the work bound.
+std::vector<WindowHypothesis> WindowSearch::SearchMap(const std::vector<Point2>& samples_scan) const {
+  if (samples_scan.empty() || pyramid_.empty()) return {};
+  const Scorer scorer(*this, samples_scan, Pose2(origin_.x(), origin_.y(), 0.0),
+                      {0, nx_ - 1, 0, ny_ - 1}, M_PI);
+  std::vector<WindowHypothesis> found;  // best first, distinct
+  const auto kth_best = [&] {
+    return static_cast<int>(found.size()) >= params_.max_hypotheses
+               ? found[params_.max_hypotheses - 1].score
+               : -std::numeric_limits<double>::infinity();
+  };
+  std::priority_queue<Node> queue = scorer.TopNodes();
+  while (!queue.empty() && scorer.evaluations < params_.max_node_evaluations) {
+    Node node = queue.top();
+    queue.pop();
+    if (node.bound <= kth_best()) break;
+    while (node.level > 0) {
+      std::vector<Node> children = scorer.Children(node);
+      if (children.empty()) break;
+      const auto best = std::max_element(children.begin(), children.end(),
+                                         [](const Node& a, const Node& b) { return a < b; });
+      for (auto it = children.begin(); it != children.end(); ++it) {
+        if (it != best && it->bound > kth_best()) queue.push(*it);
+      }
+      node = *best;
+    }
+    if (node.level > 0 || node.bound <= kth_best()) continue;
+    AddDistinct(scorer.Leaf(node), params_, found);
   }
   return found;
 }

@@ -215,11 +215,11 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
   return {
       {"localizer", "min_inlier_ratio", "a scan is matched when its refined pose explains this fraction of it", &p.min_inlier_ratio},
       {"localizer", "min_global_fit", "a pose of the global search is accepted once its fit reaches this", &p.min_global_fit},
-      {"localizer", "global_tile_half_m", "global search: window centres on a grid over the map, every 2 * this (m)", &p.global_tile_half_m},
+      {"localizer", "global_tile_half_m", "global search: its coarsest nodes tile the map, about 2 * this wide (m)", &p.global_tile_half_m},
       {"localizer", "global_resolution_m", "... cell size of its likelihood field (m)", &p.global_resolution_m},
       {"localizer", "global_hit_sigma_m", "... width of its likelihood around the polylines (m)", &p.global_hit_sigma_m},
       {"localizer", "global_max_step_range_m", "... its angular step moves samples at this range by one cell (m)", &p.global_max_step_range_m},
-      {"localizer", "global_node_evaluations", "... search nodes scored per window centre", &p.global_node_evaluations},
+      {"localizer", "global_node_evaluations", "... bound on its work: search nodes scored (each one look-up per scan sample)", &p.global_node_evaluations},
       {"localizer", "global_hypotheses", "... poses verified at most (best fit first, distinct)", &p.global_hypotheses},
       {"localizer", "max_hypotheses", "hypotheses kept between scans while ambiguous", &p.max_hypotheses},
       {"localizer", "distinct_m", "hypotheses closer than this (m) ...", &p.distinct_m},

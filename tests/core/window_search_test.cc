@@ -57,6 +57,61 @@ TEST(WindowSearchTest, InvalidParamsAreRejected) {
   EXPECT_THROW(WindowSearch({}, params), std::invalid_argument);
 }
 
+// The whole-map search (all translations, all turns, no centre) finds the scan's pose in a room
+// it has never been told about, scoring as well as an exhaustive search over a pose grid of
+// the room; its hypotheses are distinct and best first; a tiny work bound still returns at
+// most max_hypotheses poses.
+WindowSearchParams MapSearchParams() {
+  WindowSearchParams params;
+  params.resolution_m = params.hit_sigma_m = 0.2;
+  params.half_window_m = 1.0;  // sets only the pyramid's top level here
+  params.prior_weight = params.min_relative_score = 0.0;
+  params.max_hypotheses = 4;
+  params.max_node_evaluations = 1 << 30;
+  return params;
+}
+
+TEST(WindowSearchTest, SearchMapFindsThePoseAnywhereAsAnExhaustiveSearchDoes) {
+  const Scene scene = OfficeRoom();
+  const std::vector<Polyline> model = SceneModel(scene);
+  WindowSearchParams params = MapSearchParams();
+  const WindowSearch search(model, params);
+  std::mt19937 prng(42);
+  const Pose2 truth(2.5, 2.0, 0.4);
+  const std::vector<Point2> samples = ScanSamples(scene, truth, prng);
+  const std::vector<WindowHypothesis> found = search.SearchMap(samples);
+  ASSERT_FALSE(found.empty());
+  EXPECT_LE(found.size(), 4u);
+  EXPECT_THAT(found.front().T_model_scan, IsNearly(truth, 0.3, 0.1));
+  for (std::size_t i = 1; i < found.size(); ++i) {
+    EXPECT_LE(found[i].score, found[i - 1].score);
+    for (std::size_t j = 0; j < i; ++j) {
+      const bool near = (found[i].T_model_scan.Translation() - found[j].T_model_scan.Translation()).norm() <
+                            params.distinct_m &&
+                        std::abs(NormalizeAngle(found[i].T_model_scan.theta - found[j].T_model_scan.theta)) <
+                            params.distinct_rad;
+      EXPECT_FALSE(near) << i << " " << j;
+    }
+  }
+  double range = 1.0;
+  for (const Point2& p : samples) range = std::max(range, p.norm());
+  const double step = search.ResolutionM() / std::min(range, params.max_step_range_m);
+  double best = 0.0;
+  for (double theta = -M_PI; theta < M_PI; theta += step) {
+    for (double x = -1.0; x <= 9.0; x += search.ResolutionM()) {
+      for (double y = -1.0; y <= 7.0; y += search.ResolutionM()) {
+        best = std::max(best, search.Fit(samples, Pose2(x, y, theta)));
+      }
+    }
+  }
+  // The two grids are offset from each other by less than a cell: a small tolerance.
+  EXPECT_NEAR(found.front().score, best, 0.05);
+
+  params.max_node_evaluations = 50;
+  const std::vector<WindowHypothesis> bounded = WindowSearch(model, params).SearchMap(samples);
+  EXPECT_LE(bounded.size(), 4u);
+}
+
 // Oracle: the branch and bound returns the best score of the exhaustive search over the same
 // grid of poses (every rotation step, every cell offset).
 TEST(WindowSearchTest, BestScoreEqualsExhaustiveSearch) {
