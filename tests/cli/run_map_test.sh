@@ -3,7 +3,9 @@
 # 150-399 (a log cut from the same file: its first scan is not at the map's origin), placed by
 # the global search or by --initial. Where the two overlap the continued run's poses agree with
 # the first run's, its map keeps the loaded polylines and extends them, the input map is never
-# overwritten, and bad maps or a map the scans do not fit are clear errors.
+# overwritten, and bad maps or a map the scans do not fit are clear errors. Two sessions: the
+# first half of the log mapped, the second half continued in that map; together they match the
+# reference poses as one run does.
 # Usage: run_map_test.sh SHAPE_SLAM_BINARY DATASETS_DIR
 set -uo pipefail
 BIN=$1
@@ -106,6 +108,28 @@ echo "--initial: $common scans in common, $agree of them within 0.1 m"
 awk -v c="$common" -v f="$agree" 'BEGIN { exit !(c == 100 && f >= 0.9) }' &&
   pass "--initial: poses agree" || fail "--initial: $common scans in common, $agree agree"
 grep -q '"first_scan": *0' "$WORK/initial/stats.json" || fail "--initial: first_scan is not 0"
+
+# Two sessions: the first half of the log mapped, the second half (scans 455-909, which
+# revisit the first half's rooms) localized in that map by the global search and continued
+# with run --map. The two halves agree when their trajectories together, aligned once, match
+# the reference poses as one run's would: ATE <= 0.15 m (one run of the whole log: 0.077 m),
+# no gross local error at the seam, and the revisits between the halves within 0.10 m.
+expect 0 "" -- "$BIN" run "$LOG" --max-scans 455 --out "$WORK/half1" --quiet
+zcat "$LOG" | awk '$1 == "FLASER" { n++ } $1 == "#" || $1 == "PARAM" || n > 455' >"$WORK/half2.log"
+expect 0 "continued the map" -- "$BIN" run "$WORK/half2.log" --map "$WORK/half1/map.polylines" \
+  --out "$WORK/half2"
+{ cat "$WORK/half1/trajectory.tum"; grep -v '^#' "$WORK/half2/trajectory.tum"; } >"$WORK/halves.tum"
+"$BIN" eval "$WORK/halves.tum" "$2/radish/intel.gt.txt" "$2/radish/intel.relations" --json \
+  >"$WORK/halves.json" 2>/dev/null || fail "eval of the two halves failed"
+python3 - "$WORK/halves.json" <<'PY' && pass "the two sessions agree" || fail "the two sessions disagree"
+import json, sys
+d = json.load(open(sys.argv[1]))
+print("two sessions: %d poses, ATE %.3f m, revisits %.3f m %.2f deg, gross %d" % (
+    d["matched_poses"], d["ate_m"], d["revisit"]["trans_m"], d["revisit"]["rot_deg"],
+    d["gross_local"]["count"]))
+assert d["matched_poses"] >= 900 and d["ate_m"] <= 0.15, d
+assert d["revisit"]["trans_m"] <= 0.10 and d["gross_local"]["count"] == 0, d
+PY
 
 # Never overwrite the input map; bad maps name the file and line; no fit is an error.
 expect 2 "would overwrite the input map" -- \
