@@ -37,6 +37,15 @@
 //    saved map.polylines, io::LoadMapFile).
 //  * CMetricMapBuilder::options (enableMapUpdating, debugForceInsertion, alwaysInsertByClass)
 //    are not used: the mapper decides its keyframes itself.
+//  * StartLocalization(map, [T_world_robot]): localization in a frozen map (the counterpart of
+//    Cartographer's pure localization; `shape-slam localize`): the scans then go to a
+//    shape_slam::Localizer (localizer.h) of the map, which never changes; without a pose the
+//    global search finds the robot. getCurrentPoseEstimation gives the localized pose (or the
+//    best hypothesis while ambiguous, the last known pose while searching or lost, with a
+//    large covariance then), moved on by the odometry since the last scan;
+//    getCurrentlyBuiltMetricMap the frozen map; getCurrentlyBuiltMap is empty (nothing is
+//    built); LastLocalizerReport() the status of the last scan. initialize() and
+//    InitializeFromMap() return to mapping.
 //
 // Not thread-safe (unlike CMetricMapBuilderICP): call it from one thread.
 //
@@ -56,6 +65,7 @@
 #include <string>
 #include <vector>
 
+#include "shape_slam/localizer.h"
 #include "shape_slam/pipeline.h"
 #include "shape_slam/types.h"
 
@@ -104,6 +114,18 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
   /// the world frame. Throws std::invalid_argument for an empty map or a non-finite pose.
   void InitializeFromMap(const PolylineMap& map, const Pose2& T_world_robot);
 
+  /// Localization in `map` (world frame), which stays frozen: see the file comment. With
+  /// T_world_robot the robot starts there; without it the global search finds it. `params`
+  /// default to the localizer's with the builder's mapper parameters as its stages. Throws
+  /// std::invalid_argument for an empty map, a non-finite pose or invalid params.
+  void StartLocalization(const PolylineMap& map,
+                         const std::optional<Pose2>& T_world_robot = std::nullopt,
+                         const std::optional<LocalizerParams>& params = std::nullopt);
+  /// Whether the builder localizes in a frozen map (StartLocalization) rather than maps.
+  bool Localizing() const { return localizer_ != nullptr; }
+  /// The localizer's report of the last scan, in localization mode.
+  const std::optional<LocalizerReport>& LastLocalizerReport() const { return last_localizer_report_; }
+
   /// At the end of the log: the mapper's final pose-graph optimisation and map rebuild
   /// (ShapeSlam::Finish). Call it before saving the map; processing may go on afterwards.
   void Finish();
@@ -137,6 +159,10 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
 
   Options options_;
   std::unique_ptr<ShapeSlam> slam_;
+  std::unique_ptr<Localizer> localizer_;  // localization mode (StartLocalization)
+  std::optional<LocalizerReport> last_localizer_report_;
+  std::vector<StampedPose> localized_path_;  // localization mode: the localized scans
+  bool localized_ = false;                    // localization mode: the pose is known
   Pose2 T_world_map_;
   mrpt::maps::CSimpleMap initial_simplemap_;  // initialize()'s initialMap, if any
   Pose2 T_map_robot_start_;                   // the pose before the first scan

@@ -83,6 +83,9 @@ void CMetricMapBuilderShape::LoadOptions(const mrpt::config::CConfigFileBase& so
 
 void CMetricMapBuilderShape::Restart(const Pose2& T_world_map) {
   slam_ = std::make_unique<ShapeSlam>(options_.params);
+  localizer_.reset();
+  last_localizer_report_.reset();
+  localized_path_.clear();
   T_world_map_ = T_world_map;
   initial_simplemap_.clear();
   T_map_robot_start_ = Pose2();
@@ -155,6 +158,22 @@ void CMetricMapBuilderShape::InitializeFromMap(const PolylineMap& map,
   T_map_robot_start_ = T_world_robot;
 }
 
+void CMetricMapBuilderShape::StartLocalization(const PolylineMap& map,
+                                               const std::optional<Pose2>& T_world_robot,
+                                               const std::optional<LocalizerParams>& params) {
+  if (T_world_robot && !IsFinite(*T_world_robot)) {
+    throw std::invalid_argument("shape_slam::CMetricMapBuilderShape: the robot pose is not finite");
+  }
+  LocalizerParams localizer_params;
+  localizer_params.stages = options_.params;
+  auto localizer = std::make_unique<Localizer>(map, params.value_or(localizer_params));
+  if (T_world_robot) localizer->SetInitialPose(*T_world_robot);
+  Restart(Pose2());  // the map frame is the world frame
+  localizer_ = std::move(localizer);
+  T_map_robot_start_ = T_world_robot.value_or(Pose2());
+  localized_ = T_world_robot.has_value();
+}
+
 void CMetricMapBuilderShape::processActionObservation(mrpt::obs::CActionCollection& action,
                                                       mrpt::obs::CSensoryFrame& observations) {
   // Actions and frames: the odometry starts at the origin (a frame before any action has it).
@@ -207,19 +226,38 @@ void CMetricMapBuilderShape::ProcessObservation(const mrpt::obs::CObservation& o
   try {
     LaserScan scan = ToLaserScan(*range_scan);
     scan.T_odom_robot = T_odom_robot_;
-    last_report_ = slam_->Process(scan);
+    if (localizer_) {
+      last_localizer_report_ = localizer_->Process(scan);
+    } else {
+      last_report_ = slam_->Process(scan);
+    }
   } catch (const std::invalid_argument&) {
     ++skipped_scans_;  // a scan the core cannot use: the mapper state is unchanged
     return;
   }
   T_odom_last_scan_ = T_odom_robot_;
+  if (localizer_) {
+    const LocalizerReport& r = *last_localizer_report_;
+    if (r.localized || r.hypotheses > 0) T_map_robot_start_ = r.T_map_robot;  // last known pose
+    if (r.localized) localized_path_.push_back({r.timestamp_s, r.T_map_robot});
+    localized_ = r.localized;
+    return;
+  }
   if (last_report_->keyframe) ++keyframes_;
   // A loop closure may move the map without a keyframe flag; cheap to rebuild on demand.
   metric_map_stale_ = true;
 }
 
 // The last scan's pose, moved on by the odometry since then when the mapper uses odometry.
+// In localization mode: the last known pose (T_map_robot_start_, kept up to date).
 Pose2 CMetricMapBuilderShape::CurrentPoseInMap() const {
+  if (localizer_) {
+    Pose2 T_map_robot = T_map_robot_start_;
+    if (options_.params.use_odometry && T_odom_last_scan_ && T_odom_robot_) {
+      T_map_robot = T_map_robot * (T_odom_last_scan_->Inverse() * *T_odom_robot_);
+    }
+    return T_map_robot;
+  }
   if (!last_report_) return T_map_robot_start_;
   Pose2 T_map_robot = last_report_->T_map_robot;
   if (slam_->Odometry().status == OdometryStatus::kUsed && T_odom_last_scan_ && T_odom_robot_) {
@@ -231,7 +269,12 @@ Pose2 CMetricMapBuilderShape::CurrentPoseInMap() const {
 mrpt::poses::CPose3DPDF::Ptr CMetricMapBuilderShape::getCurrentPoseEstimation() const {
   const Pose2 T = T_world_map_ * CurrentPoseInMap();
   Eigen::Matrix3d cov_map = Eigen::Matrix3d::Zero();
-  if (last_report_ && last_report_->matched) {
+  if (localizer_ && !localized_) {
+    // Searching, ambiguous or lost: the pose is a guess.
+    constexpr double kUnknownSigmaM = 100.0;
+    cov_map.diagonal() << kUnknownSigmaM * kUnknownSigmaM, kUnknownSigmaM * kUnknownSigmaM,
+        M_PI * M_PI;
+  } else if (!localizer_ && last_report_ && last_report_->matched) {
     cov_map = last_report_->covariance;
   } else {
     const OdometryNoiseParams& noise = options_.params.odometry_noise;

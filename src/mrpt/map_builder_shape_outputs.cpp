@@ -43,7 +43,9 @@ const mrpt::maps::CMultiMetricMap* CMetricMapBuilderShape::getCurrentlyBuiltMetr
   map_options.creation.index_cell_size_m = options_.params.index_cell_size_m;
   if (metric_map_.maps.empty()) metric_map_.maps.push_back(CPolylineMap::Create(map_options));
   auto polylines = metric_map_.mapByClass<CPolylineMap>();
-  if (IsIdentity(T_world_map_)) {
+  if (localizer_) {
+    polylines->SetMap(localizer_->Map());  // frozen, in the world frame
+  } else if (IsIdentity(T_world_map_)) {
     polylines->SetMap(slam_->Map());
   } else {
     polylines->SetMap(InWorldFrame(slam_->Map(), T_world_map_, map_options.creation.index_cell_size_m));
@@ -55,11 +57,12 @@ const mrpt::maps::CMultiMetricMap* CMetricMapBuilderShape::getCurrentlyBuiltMetr
 void CMetricMapBuilderShape::saveCurrentEstimationToImage(const std::string& file,
                                                           bool /*formatEMF_BMP*/) {
   std::vector<Point2> path_world;
-  for (const StampedPose& pose : slam_->Trajectory()) {
+  for (const StampedPose& pose : localizer_ ? localized_path_ : slam_->Trajectory()) {
     path_world.push_back((T_world_map_ * pose.pose).Translation());
   }
   const double cell_size_m = options_.params.index_cell_size_m;
-  const PolylineMap map_world = InWorldFrame(slam_->Map(), T_world_map_, cell_size_m);
+  const PolylineMap map_world =
+      InWorldFrame(localizer_ ? localizer_->Map() : slam_->Map(), T_world_map_, cell_size_m);
   io::WriteFileAtomically(file, io::RenderPng(io::MakeMapDrawing(
                                     map_world, path_world, "CMetricMapBuilderShape")));
 }

@@ -11,11 +11,13 @@
 #include <mrpt/poses/CPosePDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <fstream>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "shape_slam/pipeline.h"
@@ -264,6 +266,82 @@ TEST(CMetricMapBuilderShape, InitializeFromAMapStartsThereAndRefusesNothingToSta
   seeded.initialize();  // restarts empty
   EXPECT_EQ(seeded.getCurrentlyBuiltMapSize(), 0u);
   EXPECT_TRUE(seeded.Mapper().Map().Empty());
+}
+
+// Every polyline's vertices, sorted: two maps with the same polylines (whatever their ids).
+std::vector<std::vector<std::pair<double, double>>> AllPolylines(const PolylineMap& map) {
+  std::vector<std::vector<std::pair<double, double>>> all;
+  for (const PolylineId id : map.Ids()) {
+    all.emplace_back();
+    for (const Point2& p : map.Get(id).points) all.back().emplace_back(p.x(), p.y());
+  }
+  std::sort(all.begin(), all.end());
+  return all;
+}
+
+// Localization mode (StartLocalization): the map of a first pass is frozen; the same log fed
+// again is localized in it by the global search (no pose given) and then tracked, the poses
+// those of the mapping pass; the map never changes and nothing is built. With the first pose
+// given the first scan is localized. initialize() returns to mapping.
+TEST(CMetricMapBuilderShape, LocalizationModeTracksInAFrozenMap) {
+  if (!Readable(kSenaLog)) GTEST_SKIP() << kSenaLog << " missing (package mrpt-common)";
+  CMetricMapBuilderShape mapping;
+  FeedLikeIcpSlam(mapping, kSenaLog);
+  mapping.Finish();
+  const PolylineMap map = mapping.Mapper().Map();
+  const std::vector<StampedPose> mapped = mapping.Mapper().Trajectory();
+  ASSERT_GT(mapped.size(), 200u);
+
+  for (const bool with_pose : {false, true}) {
+    SCOPED_TRACE(with_pose ? "first pose given" : "global search");
+    CMetricMapBuilderShape localizing;
+    if (with_pose) {
+      localizing.StartLocalization(map, mapped.front().pose);
+    } else {
+      localizing.StartLocalization(map);
+    }
+    ASSERT_TRUE(localizing.Localizing());
+    EXPECT_EQ(localizing.getCurrentPoseEstimation()->getMeanVal().x(),
+              with_pose ? mapped.front().pose.x : 0.0);
+    std::size_t scans = 0, localized = 0, agree = 0;
+    mrpt::io::CFileGZInputStream file(kSenaLog);
+    auto archive = mrpt::serialization::archiveFrom(file);
+    for (;;) {
+      mrpt::serialization::CSerializable::Ptr entry;
+      try {
+        archive >> entry;
+      } catch (const mrpt::serialization::CExceptionEOF&) {
+        break;
+      }
+      if (!localizing.ProcessRawlogEntry(entry)) continue;
+      const LocalizerReport& report = *localizing.LastLocalizerReport();
+      if (scans == 0 && with_pose) EXPECT_TRUE(report.localized);
+      const Pose2& truth = mapped.at(scans++).pose;
+      if (!report.localized) continue;
+      ++localized;
+      agree += (report.T_map_robot.Translation() - truth.Translation()).norm() <= 0.10 ? 1 : 0;
+      const mrpt::poses::CPose3D estimate = localizing.getCurrentPoseEstimation()->getMeanVal();
+      EXPECT_NEAR(estimate.x(), report.T_map_robot.x, 1e-9);  // no odometry after the scan yet
+    }
+    EXPECT_EQ(scans, mapped.size());
+    EXPECT_GE(localized, scans * 95 / 100);
+    EXPECT_GE(agree, localized * 95 / 100);
+    EXPECT_EQ(localizing.getCurrentlyBuiltMapSize(), 0u);
+    mrpt::maps::CSimpleMap built;
+    localizing.getCurrentlyBuiltMap(built);
+    EXPECT_TRUE(built.empty());
+    const PolylineMap& frozen =
+        localizing.getCurrentlyBuiltMetricMap()->mapByClass<CPolylineMap>()->Map();
+    EXPECT_EQ(AllPolylines(frozen), AllPolylines(map));
+  }
+
+  CMetricMapBuilderShape localizing;
+  EXPECT_THROW(localizing.StartLocalization(PolylineMap()), std::invalid_argument);
+  EXPECT_THROW(localizing.StartLocalization(map, Pose2(NAN, 0.0, 0.0)), std::invalid_argument);
+  EXPECT_FALSE(localizing.Localizing());
+  localizing.StartLocalization(map);
+  localizing.initialize();
+  EXPECT_FALSE(localizing.Localizing());
 }
 
 TEST(CMetricMapBuilderShape, LoadsOptionsFromAnIniSection) {
