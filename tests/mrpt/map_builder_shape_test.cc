@@ -315,7 +315,9 @@ TEST(CMetricMapBuilderShape, LocalizationModeTracksInAFrozenMap) {
       }
       if (!localizing.ProcessRawlogEntry(entry)) continue;
       const LocalizerReport& report = *localizing.LastLocalizerReport();
-      if (scans == 0 && with_pose) EXPECT_TRUE(report.localized);
+      if (scans == 0 && with_pose) {
+        EXPECT_TRUE(report.localized);
+      }
       const Pose2& truth = mapped.at(scans++).pose;
       if (!report.localized) continue;
       ++localized;
