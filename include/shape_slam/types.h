@@ -51,6 +51,12 @@ struct Pose2 {
   }
 };
 
+/// Whether two poses lie closer than max_m in translation and max_rad in heading.
+inline bool PosesWithin(const Pose2& a, const Pose2& b, double max_m, double max_rad) {
+  return (a.Translation() - b.Translation()).norm() < max_m &&
+         std::abs(NormalizeAngle(a.theta - b.theta)) < max_rad;
+}
+
 /// A pose prepared for mapping many points: its rotation is computed once, not per point.
 class PointTransform {
  public:

@@ -201,8 +201,7 @@ class Accelerator {
 };
 
 bool SmallUpdate(const Pose2& before, const Pose2& after, const AlignmentParams& params) {
-  return (after.Translation() - before.Translation()).norm() < params.convergence_translation_m &&
-         std::abs(NormalizeAngle(after.theta - before.theta)) < params.convergence_rotation_rad;
+  return PosesWithin(after, before, params.convergence_translation_m, params.convergence_rotation_rad);
 }
 
 }  // namespace

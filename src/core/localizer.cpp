@@ -82,8 +82,7 @@ internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
 }
 
 bool Near(const Pose2& a, const Pose2& b, const LocalizerParams& params) {
-  return (a.Translation() - b.Translation()).norm() <= params.distinct_m &&
-         std::abs(NormalizeAngle(a.theta - b.theta)) <= params.distinct_rad;
+  return PosesWithin(a, b, params.distinct_m, params.distinct_rad);
 }
 
 // The mean of the last motions (constant velocity), or nullopt.

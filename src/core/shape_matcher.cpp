@@ -343,8 +343,7 @@ struct Candidate {
 };
 
 bool SameEstimate(const Pose2& a, const Pose2& b, const ShapeMatcherParams& params) {
-  return (a.Translation() - b.Translation()).norm() < params.same_seed_m &&
-         std::abs(NormalizeAngle(a.theta - b.theta)) < params.same_seed_rad;
+  return PosesWithin(a, b, params.same_seed_m, params.same_seed_rad);
 }
 
 std::vector<Candidate> SeedCandidates(const ShapeMatchInput& input,

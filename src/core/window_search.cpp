@@ -148,8 +148,7 @@ namespace {
 bool SameAsBetter(const std::vector<WindowHypothesis>& found, const Pose2& pose,
                   const WindowSearchParams& params) {
   return std::any_of(found.begin(), found.end(), [&](const WindowHypothesis& h) {
-    return (h.T_model_scan.Translation() - pose.Translation()).norm() < params.distinct_m &&
-           std::abs(NormalizeAngle(h.T_model_scan.theta - pose.theta)) < params.distinct_rad;
+    return PosesWithin(h.T_model_scan, pose, params.distinct_m, params.distinct_rad);
   });
 }
 
@@ -182,8 +181,7 @@ namespace {
 void AddDistinct(const WindowHypothesis& h, const WindowSearchParams& params,
                  std::vector<WindowHypothesis>& found) {
   const auto near = [&](const WindowHypothesis& f) {
-    return (f.T_model_scan.Translation() - h.T_model_scan.Translation()).norm() < params.distinct_m &&
-           std::abs(NormalizeAngle(f.T_model_scan.theta - h.T_model_scan.theta)) < params.distinct_rad;
+    return PosesWithin(f.T_model_scan, h.T_model_scan, params.distinct_m, params.distinct_rad);
   };
   for (const WindowHypothesis& f : found) {
     if (near(f) && f.score >= h.score) return;
