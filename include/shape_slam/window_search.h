@@ -104,7 +104,8 @@ class WindowSearch {
            const Pose2& centre, const CellRange& range, double half_window_rad);
     float Bound(int r, int level, int tx, int ty) const;
     std::priority_queue<Node> TopNodes() const;
-    std::vector<Node> Children(const Node& node) const;
+    // Writes the node's (up to 4) children one level down into out; returns how many.
+    int Children(const Node& node, Node* out) const;
     WindowHypothesis Leaf(const Node& node) const;
     mutable int evaluations = 0;
 

@@ -1,6 +1,7 @@
 #include "shape_slam/window_search.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <queue>
 #include <stdexcept>
@@ -242,17 +243,17 @@ std::priority_queue<WindowSearch::Node> WindowSearch::Scorer::TopNodes() const {
   return queue;
 }
 
-std::vector<WindowSearch::Node> WindowSearch::Scorer::Children(const Node& node) const {
-  std::vector<Node> children;
+int WindowSearch::Scorer::Children(const Node& node, Node* out) const {
+  int count = 0;
   const int half = 1 << (node.level - 1);
   for (const int dx : {0, half}) {
     for (const int dy : {0, half}) {
       if (node.tx + dx > range_.x1 || node.ty + dy > range_.y1) continue;
-      children.push_back({Bound(node.rotation, node.level - 1, node.tx + dx, node.ty + dy),
-                          node.rotation, node.level - 1, node.tx + dx, node.ty + dy});
+      out[count++] = {Bound(node.rotation, node.level - 1, node.tx + dx, node.ty + dy), node.rotation,
+                      node.level - 1, node.tx + dx, node.ty + dy};
     }
   }
-  return children;
+  return count;
 }
 
 WindowHypothesis WindowSearch::Scorer::Leaf(const Node& node) const {
@@ -277,7 +278,9 @@ std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& sa
     queue.pop();
     if (!found.empty() && node.bound < params_.min_relative_score * found.front().score) break;
     if (node.level > 0) {
-      for (const Node& child : scorer.Children(node)) queue.push(child);
+      std::array<Node, 4> children;
+      const int count = scorer.Children(node, children.data());
+      for (int i = 0; i < count; ++i) queue.push(children[i]);
       continue;
     }
     const WindowHypothesis leaf = scorer.Leaf(node);
@@ -309,11 +312,11 @@ std::vector<WindowHypothesis> WindowSearch::SearchMap(const std::vector<Point2>&
     queue.pop();
     if (node.bound <= kth_best()) break;
     while (node.level > 0) {
-      std::vector<Node> children = scorer.Children(node);
-      if (children.empty()) break;
-      const auto best = std::max_element(children.begin(), children.end(),
-                                         [](const Node& a, const Node& b) { return a < b; });
-      for (auto it = children.begin(); it != children.end(); ++it) {
+      std::array<Node, 4> children;
+      const int count = scorer.Children(node, children.data());
+      if (count == 0) break;
+      const auto best = std::max_element(children.begin(), children.begin() + count);
+      for (auto it = children.begin(); it != children.begin() + count; ++it) {
         if (it != best && it->bound > kth_best()) queue.push(*it);
       }
       node = *best;
