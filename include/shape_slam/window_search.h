@@ -83,7 +83,7 @@ class WindowSearch {
   /// first: one branch and bound over the field built at construction (its top level is the
   /// window's), so the places that explain the scan poorly are cut early wherever they are.
   /// For a global search (localization without a pose); half_window_m and half_window_rad are
-  /// not used, the other params are.
+  /// not used, the other params are (give it prior_weight 0: there is no centre to be near).
   std::vector<WindowHypothesis> SearchMap(const std::vector<Point2>& samples_scan) const;
 
   /// Mean likelihood of the samples at a pose (the fit of WindowHypothesis).

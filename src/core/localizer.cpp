@@ -186,26 +186,20 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   return verified;
 }
 
-// The window search from every tile centre (all turns): the best distinct robot poses of the
-// whole map, best fit first (ties: the earlier tile).
+// The branch and bound over the whole map (all turns): its best distinct robot poses, best fit
+// first. Its params (GlobalSearchParams) have no motion prior, so score is fit, and the
+// localizer's distinct_m, distinct_rad and global_hypotheses, so the poses are already the
+// distinct few to verify.
 std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
                                                const LaserScan& scan) const {
   const ShapeSlamParams& p = params_.stages;
   const double spacing = p.matcher.alignment.sample_spacing_m;
   const std::vector<Point2> samples = internal::Thinned(
       internal::AlignmentSamples(shapes.fine, spacing), spacing, p.window_search_spacing_m);
-  std::vector<WindowHypothesis> all = global_search_.SearchMap(samples);
-  std::stable_sort(all.begin(), all.end(), [](const WindowHypothesis& a, const WindowHypothesis& b) {
-    return a.fit > b.fit;
-  });
-  std::vector<Pose2> candidates;  // sensor poses
-  for (const WindowHypothesis& h : all) {
-    if (static_cast<int>(candidates.size()) >= params_.global_hypotheses) break;
-    const bool known = std::any_of(candidates.begin(), candidates.end(),
-                                   [&](const Pose2& c) { return Near(c, h.T_model_scan, params_); });
-    if (!known) candidates.push_back(h.T_model_scan);
+  std::vector<Pose2> candidates;  // robot poses
+  for (const WindowHypothesis& h : global_search_.SearchMap(samples)) {
+    candidates.push_back(h.T_model_scan * scan.T_robot_sensor.Inverse());
   }
-  for (Pose2& c : candidates) c = c * scan.T_robot_sensor.Inverse();
   return candidates;
 }
 
