@@ -165,7 +165,8 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
   bool localized_ = false;                    // localization mode: the pose is known
   Pose2 T_world_map_;
   mrpt::maps::CSimpleMap initial_simplemap_;  // initialize()'s initialMap, if any
-  Pose2 T_map_robot_start_;                   // the pose before the first scan
+  Pose2 T_map_robot_start_;                   // mapping: the pose before the first scan
+  Pose2 T_map_robot_last_known_;  // localization mode: localized or best hypothesis, last scan
   mrpt::obs::CActionCollection::Ptr pending_actions_;  // read, waiting for its sensory frame
   std::optional<Pose2> T_odom_robot_;       // odometry so far (increments or absolute)
   std::optional<Pose2> T_odom_last_scan_;   // odometry at the last processed scan

@@ -89,6 +89,7 @@ void CMetricMapBuilderShape::Restart(const Pose2& T_world_map) {
   T_world_map_ = T_world_map;
   initial_simplemap_.clear();
   T_map_robot_start_ = Pose2();
+  T_map_robot_last_known_ = Pose2();
   pending_actions_.reset();
   T_odom_robot_.reset();
   T_odom_last_scan_.reset();
@@ -170,7 +171,7 @@ void CMetricMapBuilderShape::StartLocalization(const PolylineMap& map,
   if (T_world_robot) localizer->SetInitialPose(*T_world_robot);
   Restart(Pose2());  // the map frame is the world frame
   localizer_ = std::move(localizer);
-  T_map_robot_start_ = T_world_robot.value_or(Pose2());
+  T_map_robot_last_known_ = T_world_robot.value_or(Pose2());
   localized_ = T_world_robot.has_value();
 }
 
@@ -238,7 +239,7 @@ void CMetricMapBuilderShape::ProcessObservation(const mrpt::obs::CObservation& o
   T_odom_last_scan_ = T_odom_robot_;
   if (localizer_) {
     const LocalizerReport& r = *last_localizer_report_;
-    if (r.localized || r.hypotheses > 0) T_map_robot_start_ = r.T_map_robot;  // last known pose
+    if (r.localized || r.hypotheses > 0) T_map_robot_last_known_ = r.T_map_robot;
     if (r.localized) localized_path_.push_back({r.timestamp_s, r.T_map_robot});
     localized_ = r.localized;
     return;
@@ -249,10 +250,10 @@ void CMetricMapBuilderShape::ProcessObservation(const mrpt::obs::CObservation& o
 }
 
 // The last scan's pose, moved on by the odometry since then when the mapper uses odometry.
-// In localization mode: the last known pose (T_map_robot_start_, kept up to date).
+// In localization mode: the last known pose, moved on the same way.
 Pose2 CMetricMapBuilderShape::CurrentPoseInMap() const {
   if (localizer_) {
-    Pose2 T_map_robot = T_map_robot_start_;
+    Pose2 T_map_robot = T_map_robot_last_known_;
     if (options_.params.use_odometry && T_odom_last_scan_ && T_odom_robot_) {
       T_map_robot = T_map_robot * (T_odom_last_scan_->Inverse() * *T_odom_robot_);
     }
