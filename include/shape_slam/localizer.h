@@ -7,7 +7,10 @@
 //   tracking   one pose, tracked like the mapper's per-scan localization (§4.2-§5.1) against
 //              the visible shape of the map from the prediction (§3)
 //   lost       tracking failed (several scans without a trusted match, or a sudden drop of
-//              the fit: the kidnapped robot); the global search runs again until it recovers
+//              the fit: the kidnapped robot); the global search runs again until it recovers.
+//              The pose tracked until then stays a hypothesis, with the evidence it gathered:
+//              after a passing occlusion it matches again and wins at once (a tracking fit
+//              suffices for it); after a kidnapping it misses and is dropped like any other
 //
 // The global search is one branch and bound over every translation of the map and all turns
 // (WindowSearch::SearchMap, window_search.h) on the map's likelihood field and pyramid, built
@@ -117,6 +120,7 @@ class Localizer {
     double fit = 0.0;
     std::vector<Pose2> recent_motions;  // T_prev_cur, for the constant-velocity prediction
     int misses = 0;                     // consecutive scans without a trusted match
+    bool tracked = false;  // the pose tracked until a loss: accepted again at min_inlier_ratio
   };
   struct Verified {
     Pose2 T_map_robot;
@@ -145,7 +149,6 @@ class Localizer {
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   LocalizerStatus status_ = LocalizerStatus::kSearching;
   bool was_localized_ = false;
-  int lost_scans_ = 0;   // tracking: consecutive scans without a trusted match
   int drop_scans_ = 0;   // tracking: consecutive scans with a dropped fit
   double fit_mean_ = 0.0;
   std::optional<Pose2> last_T_odom_robot_;

@@ -137,7 +137,7 @@ void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   hypotheses_ = {Hypothesis{T_map_robot, 1.0, 0.0, {}, 0}};
   status_ = LocalizerStatus::kTracking;
   was_localized_ = true;
-  lost_scans_ = drop_scans_ = 0;
+  drop_scans_ = 0;
   fit_mean_ = -1.0;  // set by the first match
 }
 
@@ -274,14 +274,16 @@ LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& sca
   const bool rival = hypotheses_.size() > 1 &&
                      hypotheses_[1].evidence >= best.evidence - params_.ambiguous_margin_samples;
   if (rival) report.status = LocalizerStatus::kAmbiguous;
-  if (rival || best.misses > 0 || best.fit < params_.min_global_fit) return report;
+  const double min_fit = best.tracked ? params_.min_inlier_ratio : params_.min_global_fit;
+  if (rival || best.misses > 0 || best.fit < min_fit) return report;
   hypotheses_.resize(1);
+  hypotheses_.front().tracked = false;
   report.hypotheses = 1;
   report.status = status_ = LocalizerStatus::kTracking;
   report.localized = report.matched = true;
   report.recovered_event = was_localized_;
   was_localized_ = true;
-  lost_scans_ = drop_scans_ = 0;
+  drop_scans_ = 0;
   fit_mean_ = best.fit;
   return report;
 }
@@ -291,15 +293,16 @@ LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& sca
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                                      const std::optional<Pose2>& odometry_delta) {
   Hypothesis& h = hypotheses_.front();
-  const Verified v = Track(shapes, scan, h, odometry_delta, lost_scans_);
+  const Verified v = Track(shapes, scan, h, odometry_delta, h.misses);
   Motion(h, v.T_map_robot);
   h.fit = v.fit;
+  h.evidence = params_.evidence_decay * h.evidence + v.explained;
+  h.misses = v.trusted ? 0 : h.misses + 1;
   LocalizerReport report;
   report.T_map_robot = v.T_map_robot;
   report.inlier_ratio = v.fit;
   report.matched = v.trusted;
   report.hypotheses = 1;
-  lost_scans_ = v.trusted ? 0 : lost_scans_ + 1;
   const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
   drop_scans_ = dropped ? drop_scans_ + 1 : 0;
   if (v.trusted && !dropped) {
@@ -307,11 +310,10 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
                                 : (1.0 - params_.fit_mean_weight) * fit_mean_ +
                                       params_.fit_mean_weight * v.fit;
   }
-  if (lost_scans_ >= params_.lost_after_scans || drop_scans_ >= params_.fit_drop_scans) {
-    hypotheses_.clear();
+  if (h.misses >= params_.lost_after_scans || drop_scans_ >= params_.fit_drop_scans) {
+    h.tracked = true;  // kept: see "lost" in localizer.h
     report.status = status_ = LocalizerStatus::kLost;
     report.lost_event = true;
-    report.hypotheses = 0;
     return report;
   }
   report.status = LocalizerStatus::kTracking;

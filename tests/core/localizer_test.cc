@@ -138,6 +138,36 @@ TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
   EXPECT_LT(recovered_at, lost_at + 10);
 }
 
+TEST(LocalizerTest, KeepsItsPoseThroughABlackoutAndWinsAtOnceAfterIt) {
+  // 30 scans tracked, then 2 scans blinded by clutter close around the robot (every range
+  // 0.5 m): the fit drops, so the robot is lost; the pose tracked until then stays a
+  // hypothesis, moved on by the odometry, and is accepted again at the first clear scan.
+  SimRun run = Simulate(1, 45, 6);
+  constexpr std::size_t kBlind = 30, kClear = 32;
+  for (std::size_t i = kBlind; i < kClear; ++i) {
+    std::fill(run.scans[i].ranges_m.begin(), run.scans[i].ranges_m.end(), 0.5);
+  }
+  Localizer localizer(SceneMap(testing::LoopWorld()));
+  localizer.SetInitialPose(run.truth[0]);
+  int lost_at = -1;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    const LocalizerReport report = localizer.Process(run.scans[i]);
+    if (report.lost_event && lost_at < 0) lost_at = static_cast<int>(i);
+    if (i < kBlind || i >= kClear) {
+      EXPECT_TRUE(report.localized) << "scan " << i;
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
+    } else if (report.lost_event) {  // the tracked pose is still the best hypothesis
+      EXPECT_EQ(report.hypotheses, 1) << "scan " << i;
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.3, 0.1)) << "scan " << i;
+    }
+    if (i == kClear) {
+      EXPECT_TRUE(report.recovered_event);
+    }
+  }
+  EXPECT_GE(lost_at, static_cast<int>(kBlind));
+  EXPECT_LT(lost_at, static_cast<int>(kClear));
+}
+
 TEST(LocalizerTest, IsDeterministic) {
   const SimRun run = Simulate(1, 15, 5);
   Localizer a(SceneMap(testing::LoopWorld())), b(SceneMap(testing::LoopWorld()));
