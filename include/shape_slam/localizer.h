@@ -39,6 +39,10 @@ struct LocalizerParams {
   /// A scan is matched when its refined pose explains at least this fraction of it (the map is
   /// finished, so a good match explains more than the mapper's min_inlier_ratio asks).
   double min_inlier_ratio = 0.5;
+  /// While tracking, a scan is also matched when its fit reaches this times the running mean of
+  /// the fit (fit_mean_weight), if that is lower: in a map of a cluttered place a right pose
+  /// explains less of each scan (0: off).
+  double relative_inlier_ratio = 0.8;
   /// A hypothesis of the global search is accepted as the pose once its fit reaches this.
   double min_global_fit = 0.6;
   /// Global search: its coarsest nodes, which tile the map, are about 2 * global_tile_half_m

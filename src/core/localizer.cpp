@@ -99,6 +99,7 @@ std::optional<Pose2> MeanMotion(const std::vector<Pose2>& motions) {
 void LocalizerParams::Validate() const {
   stages.Validate();
   InRange(min_inlier_ratio, 0.0, 1.0, "LocalizerParams::min_inlier_ratio");
+  InRange(relative_inlier_ratio, 0.0, 1.0, "LocalizerParams::relative_inlier_ratio");
   InRange(min_global_fit, 0.0, 1.0, "LocalizerParams::min_global_fit");
   InRange(global_tile_half_m, 0.1, 1e3, "LocalizerParams::global_tile_half_m");
   InRange(global_resolution_m, 0.01, 10.0, "LocalizerParams::global_resolution_m");
@@ -296,16 +297,19 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   const Verified v = Track(shapes, scan, h, odometry_delta, h.misses);
   Motion(h, v.T_map_robot);
   h.fit = v.fit;
+  // v.fit > 0: trusted by the per-scan localization (the mapper's min_inlier_ratio).
+  const bool matched = v.trusted || (params_.relative_inlier_ratio > 0.0 && fit_mean_ > 0.0 &&
+                                     v.fit > 0.0 && v.fit >= params_.relative_inlier_ratio * fit_mean_);
   h.evidence = params_.evidence_decay * h.evidence + v.explained;
-  h.misses = v.trusted ? 0 : h.misses + 1;
+  h.misses = matched ? 0 : h.misses + 1;
   LocalizerReport report;
   report.T_map_robot = v.T_map_robot;
   report.inlier_ratio = v.fit;
-  report.matched = v.trusted;
+  report.matched = matched;
   report.hypotheses = 1;
   const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
   drop_scans_ = dropped ? drop_scans_ + 1 : 0;
-  if (v.trusted && !dropped) {
+  if (matched && !dropped) {
     fit_mean_ = fit_mean_ < 0.0 ? v.fit
                                 : (1.0 - params_.fit_mean_weight) * fit_mean_ +
                                       params_.fit_mean_weight * v.fit;

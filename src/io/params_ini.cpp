@@ -214,6 +214,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
 std::vector<Field> LocalizerFields(LocalizerParams& p) {
   return {
       {"localizer", "min_inlier_ratio", "a scan is matched when its refined pose explains this fraction of it", &p.min_inlier_ratio},
+      {"localizer", "relative_inlier_ratio", "... or, while tracking, this times the running mean of the fit, when lower (0: off)", &p.relative_inlier_ratio},
       {"localizer", "min_global_fit", "a pose of the global search is accepted once its fit reaches this", &p.min_global_fit},
       {"localizer", "global_tile_half_m", "global search: its coarsest nodes tile the map, about 2 * this wide (m)", &p.global_tile_half_m},
       {"localizer", "global_resolution_m", "... cell size of its likelihood field (m)", &p.global_resolution_m},

@@ -168,6 +168,37 @@ TEST(LocalizerTest, KeepsItsPoseThroughABlackoutAndWinsAtOnceAfterIt) {
   EXPECT_LT(lost_at, static_cast<int>(kClear));
 }
 
+TEST(LocalizerTest, ARightPoseStaysLocalizedWhereTheFixedFitThresholdIsTooStrict) {
+  // A place where no scan reaches min_inlier_ratio (here set above any fit, as in a cluttered
+  // place the map does not hold): with relative_inlier_ratio the fit is judged against its own
+  // running mean, so tracking holds; without it the robot is declared lost.
+  SimRun run = Simulate(0, 40, 7);
+  for (LaserScan& scan : run.scans) {  // a quarter of the beams see clutter at 1 m
+    for (std::size_t b = 0; b < scan.ranges_m.size(); b += 4) scan.ranges_m[b] = 1.0;
+  }
+  for (const double relative : {0.8, 0.0}) {
+    LocalizerParams params;
+    params.min_inlier_ratio = 0.999;
+    params.relative_inlier_ratio = relative;
+    Localizer localizer(SceneMap(testing::LoopWorld()), params);
+    localizer.SetInitialPose(run.truth[0]);
+    int lost = 0;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      lost += report.lost_event ? 1 : 0;
+      if (relative > 0.0) {
+        EXPECT_TRUE(report.localized) << "scan " << i;
+        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
+      }
+    }
+    if (relative > 0.0) {
+      EXPECT_EQ(lost, 0);
+    } else {
+      EXPECT_GT(lost, 0);
+    }
+  }
+}
+
 TEST(LocalizerTest, IsDeterministic) {
   const SimRun run = Simulate(1, 15, 5);
   Localizer a(SceneMap(testing::LoopWorld())), b(SceneMap(testing::LoopWorld()));
