@@ -133,7 +133,9 @@ class Localizer {
     bool trusted = false;
   };
   Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
-                 const std::optional<Pose2>& odometry_delta, int lost_scans) const;
+                 const std::optional<Pose2>& odometry_delta, int lost_scans,
+                 double min_fit) const;
+  double TrackingMinFit() const;
   std::vector<Pose2> GlobalCandidates(const ScanShapes& shapes, const LaserScan& scan) const;
   void PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
                            const std::optional<Pose2>& odometry_delta);

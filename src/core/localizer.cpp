@@ -160,7 +160,7 @@ std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan) {
 Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& scan,
                                      const Hypothesis& hypothesis,
                                      const std::optional<Pose2>& odometry_delta,
-                                     int lost_scans) const {
+                                     int lost_scans, double min_fit) const {
   const ShapeSlamParams& p = params_.stages;
   Pose2 T_map_robot_pred = hypothesis.T_map_robot;
   std::optional<Pose2> velocity_hint;
@@ -179,7 +179,7 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
       internal::Localize(shapes, model, odometry_delta, velocity_hint, lost_scans, p);
   verified.T_map_robot = T_map_sensor_pred * loc.correction * scan.T_robot_sensor.Inverse();
   verified.fit = loc.trusted ? loc.inlier_ratio : 0.0;
-  verified.trusted = loc.trusted && loc.inlier_ratio >= params_.min_inlier_ratio;
+  verified.trusted = loc.trusted && loc.inlier_ratio >= min_fit;
   verified.explained =
       verified.fit *
       static_cast<double>(
@@ -218,7 +218,7 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
                                     const std::optional<Pose2>& odometry_delta) {
   std::vector<Hypothesis> kept;
   for (Hypothesis& h : hypotheses_) {
-    const Verified v = Track(shapes, scan, h, odometry_delta, h.misses);
+    const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, params_.min_inlier_ratio);
     Motion(h, v.T_map_robot);
     h.fit = v.fit;
     h.evidence = params_.evidence_decay * h.evidence + v.explained;
@@ -233,7 +233,7 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
 void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan) {
   for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
     const Hypothesis probe{candidate, 0.0, 0.0, {}, 0};
-    const Verified v = Track(shapes, scan, probe, Pose2(), 0);
+    const Verified v = Track(shapes, scan, probe, Pose2(), 0, params_.min_inlier_ratio);
     if (!v.trusted) continue;
     const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
       return Near(h.T_map_robot, v.T_map_robot, params_);
@@ -289,27 +289,31 @@ LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& sca
   return report;
 }
 
+// While tracking, the fit a scan needs to be matched: min_inlier_ratio, or
+// relative_inlier_ratio times the running mean of the fit when that is lower.
+double Localizer::TrackingMinFit() const {
+  if (params_.relative_inlier_ratio <= 0.0 || fit_mean_ <= 0.0) return params_.min_inlier_ratio;
+  return std::min(params_.min_inlier_ratio, params_.relative_inlier_ratio * fit_mean_);
+}
+
 // Localized: the one pose is tracked; too many scans without a trusted match, or a fit that
 // stays far below its running mean, mean the robot is lost (or was carried away).
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                                      const std::optional<Pose2>& odometry_delta) {
   Hypothesis& h = hypotheses_.front();
-  const Verified v = Track(shapes, scan, h, odometry_delta, h.misses);
+  const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit());
   Motion(h, v.T_map_robot);
   h.fit = v.fit;
-  // v.fit > 0: trusted by the per-scan localization (the mapper's min_inlier_ratio).
-  const bool matched = v.trusted || (params_.relative_inlier_ratio > 0.0 && fit_mean_ > 0.0 &&
-                                     v.fit > 0.0 && v.fit >= params_.relative_inlier_ratio * fit_mean_);
   h.evidence = params_.evidence_decay * h.evidence + v.explained;
-  h.misses = matched ? 0 : h.misses + 1;
+  h.misses = v.trusted ? 0 : h.misses + 1;
   LocalizerReport report;
   report.T_map_robot = v.T_map_robot;
   report.inlier_ratio = v.fit;
-  report.matched = matched;
+  report.matched = v.trusted;
   report.hypotheses = 1;
   const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
   drop_scans_ = dropped ? drop_scans_ + 1 : 0;
-  if (matched && !dropped) {
+  if (v.trusted && !dropped) {
     fit_mean_ = fit_mean_ < 0.0 ? v.fit
                                 : (1.0 - params_.fit_mean_weight) * fit_mean_ +
                                       params_.fit_mean_weight * v.fit;
