@@ -44,6 +44,17 @@ struct CandidateSelectionParams {
   double prior_weight = 0.0;
   double prior_sigma_m = 0.5;    ///< metres
   double prior_sigma_rad = 0.5;  ///< radians
+  /// The motion prior's penalty never exceeds this (fit units; 0: unbounded): a heavy-tailed
+  /// prior. Between close fits (along a featureless corridor) the candidate nearer the
+  /// reference still wins; one that explains clearly more of the scan wins wherever it lies (a
+  /// robot that starts, stops or turns between two scans, when the reference is the last motion).
+  double prior_max_penalty = 0.0;
+  /// > 0: a sample off the model that continues a model polyline beyond its open end (within
+  /// inlier_distance_m of the end segment's line, at most open_end_m past the end) is unknown
+  /// space, left out of the fit instead of counted as a miss. A scan that sees farther along a
+  /// corridor than the model then fits as well at its true pose as at one short of it; counted
+  /// as misses, those samples make the shorter motion fit best. 0: off, every sample counts.
+  double open_end_m = 0.0;
 
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;
@@ -52,7 +63,9 @@ struct CandidateSelectionParams {
 /// A candidate after the quick ICP.
 struct RankedCandidate {
   Pose2 T_model_scan;     ///< finished by the ICP steps
-  double fit = 0.0;       ///< fraction of the samples within inlier_distance_m of the model
+  /// Fraction of the samples within inlier_distance_m of the model (of those not in unknown
+  /// space beyond the model's open ends when open_end_m > 0).
+  double fit = 0.0;
   double score = 0.0;     ///< fit less the motion prior (see prior_weight)
   double distance = 0.0;  ///< to the reference, metres (see turn_weight_m_per_rad)
   int index = 0;          ///< position of the candidate it came from in the input

@@ -101,14 +101,25 @@ struct ShapeSlamParams {
   /// Without odometry: the largest motion between consecutive scans that an estimate may
   /// imply (metres, radians). Shape matching without a guess can find look-alike places
   /// anywhere in view (the other side of a symmetric block, a parallel corridor); no robot
-  /// jumps there between two scans. Generous on purpose: logs scanned every second or two.
+  /// jumps there between two scans. Generous on purpose: logs scanned every second or two
+  /// (aces turns 78 deg between two of its scans; 1.2 rad refused that turn).
   double max_motion_per_scan_m = 1.5;
-  double max_turn_per_scan_rad = 1.2;
+  double max_turn_per_scan_rad = 1.6;
   /// Without odometry, candidates are ranked by fit less a constant-velocity motion prior
   /// (CandidateSelectionParams::prior_*): between fits that differ little, as along a
   /// corridor, the motion nearer the last one wins. With odometry the prior comes from the
   /// odometry noise model instead.
   double motion_prior_weight = 0.03;
+  /// ... and its penalty is at most this (CandidateSelectionParams::prior_max_penalty): a
+  /// candidate that explains this much more of the scan wins over the constant velocity, which
+  /// is wrong whenever the robot starts, stops or turns between two scans (0: unbounded).
+  double motion_prior_max_penalty = 0.08;
+  /// Without odometry, the candidates' fit leaves out the samples that continue the model's
+  /// polylines past their open ends, up to max_motion_per_scan_m beyond them
+  /// (CandidateSelectionParams::open_end_m): space the model has not seen yet. Counted as misses,
+  /// they make a scan fit best short of its true pose along a corridor, and the constant velocity
+  /// then decays to a standstill.
+  bool motion_unknown_beyond_ends = true;
   /// The constant-velocity prediction is the mean motion of this many last scans.
   int velocity_window = 3;
   double motion_prior_sigma_m = 0.5;     ///< metres

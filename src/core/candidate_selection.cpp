@@ -1,5 +1,6 @@
 #include "shape_slam/candidate_selection.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -29,6 +30,12 @@ void CandidateSelectionParams::Validate() const {
   positive(prior_sigma_rad, "prior_sigma_rad");
   if (!(prior_weight >= 0.0) || !std::isfinite(prior_weight)) {
     throw std::invalid_argument("CandidateSelectionParams::prior_weight must be >= 0");
+  }
+  if (!(prior_max_penalty >= 0.0) || !std::isfinite(prior_max_penalty)) {
+    throw std::invalid_argument("CandidateSelectionParams::prior_max_penalty must be >= 0");
+  }
+  if (!(open_end_m >= 0.0) || !std::isfinite(open_end_m)) {
+    throw std::invalid_argument("CandidateSelectionParams::open_end_m must be >= 0");
   }
   if (max_refinements < 1) {
     throw std::invalid_argument("CandidateSelectionParams::max_refinements must be >= 1");
@@ -69,7 +76,7 @@ CandidateSelector::CandidateSelector(const std::vector<Polyline>& model,
   params_.Validate();
   icp_ = std::make_unique<const internal::ModelIcp>(
       model, std::max(params_.capture_distance_m, params_.inlier_distance_m),
-      params_.inlier_distance_m);
+      params_.inlier_distance_m, params_.open_end_m);
 }
 
 CandidateSelector::~CandidateSelector() = default;
@@ -96,8 +103,10 @@ std::vector<RankedCandidate> CandidateSelector::Rank(
     const Pose2 motion = reference.Inverse() * aligned;
     const double et = motion.Translation().norm() / params_.prior_sigma_m;
     const double er = motion.theta / params_.prior_sigma_rad;
-    const double fit = Fit(samples_scan, aligned);
-    finished.push_back({aligned, fit, fit - params_.prior_weight * (et * et + er * er),
+    const double fit = icp_->KnownInlierRatio(samples_scan, aligned);
+    double penalty = params_.prior_weight * (et * et + er * er);
+    if (params_.prior_max_penalty > 0.0) penalty = std::min(penalty, params_.prior_max_penalty);
+    finished.push_back({aligned, fit, fit - penalty,
                         PoseDistance(reference, aligned, params_.turn_weight_m_per_rad),
                         static_cast<int>(i)});
     scores.push_back(finished.back().score);

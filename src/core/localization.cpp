@@ -132,6 +132,8 @@ class TrackingSearch {
       selection_.prior_weight = params.motion_prior_weight;
       selection_.prior_sigma_m = growth_ * params.motion_prior_sigma_m;
       selection_.prior_sigma_rad = growth_ * params.motion_prior_sigma_rad;
+      selection_.prior_max_penalty = params.motion_prior_max_penalty;
+      if (params.motion_unknown_beyond_ends) selection_.open_end_m = params.max_motion_per_scan_m;
     }
     selector_.emplace(all_, selection_);
     // Between equally good fits the one nearest the prediction (with odometry) or the

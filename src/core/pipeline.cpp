@@ -73,6 +73,7 @@ void ShapeSlamParams::Validate() const {
   Positive(max_motion_per_scan_m, "ShapeSlamParams::max_motion_per_scan_m");
   Positive(max_turn_per_scan_rad, "ShapeSlamParams::max_turn_per_scan_rad");
   NonNegative(motion_prior_weight, "ShapeSlamParams::motion_prior_weight");
+  NonNegative(motion_prior_max_penalty, "ShapeSlamParams::motion_prior_max_penalty");
   if (velocity_window < 1) throw std::invalid_argument("ShapeSlamParams::velocity_window must be >= 1");
   Positive(motion_prior_sigma_m, "ShapeSlamParams::motion_prior_sigma_m");
   if (!(odometry_check_fit >= 0.0 && odometry_check_fit <= 1.0)) {

@@ -43,6 +43,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "max_turn_per_scan_rad", "... or a larger turn (rad)", &p.max_turn_per_scan_rad},
       {"pipeline", "velocity_window", "without odometry, the constant-velocity prediction is the mean motion of this many last scans", &p.velocity_window},
       {"pipeline", "motion_prior_weight", "without odometry, candidates are ranked by fit less this * squared normalised motion from constant velocity", &p.motion_prior_weight},
+      {"pipeline", "motion_prior_max_penalty", "... and that penalty is at most this (0: unbounded)", &p.motion_prior_max_penalty},
+      {"pipeline", "motion_unknown_beyond_ends", "without odometry, samples continuing a model polyline past its open end are left out of the candidates' fit", &p.motion_unknown_beyond_ends},
       {"pipeline", "motion_prior_sigma_m", "... translation scale (m)", &p.motion_prior_sigma_m},
       {"pipeline", "odometry_check_fit", "a scan fitting less than this at the odometry's estimate is also matched without odometry (0: off)", &p.odometry_check_fit},
       {"pipeline", "odometry_override_margin", "... and that match wins when it fits at least this much better", &p.odometry_override_margin},

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <random>
 
 #include "pose_matchers.h"
@@ -127,6 +128,64 @@ TEST(CandidateSelectorTest, AcceptFilterDropsCandidates) {
   EXPECT_EQ(ranked[0].index, 0);
 }
 
+// A plain corridor along x (walls at y = 0 and y = 2) seen by an 8 m scanner: the model is what
+// the robot saw at x = 0, the scan is taken 1 m further on, so its far samples lie past the
+// model's open ends. Counted as misses they make the scan fit best short of its pose; left out
+// as unknown space (open_end_m) the true pose fits as well as any along the corridor.
+TEST(CandidateSelectorTest, SamplesPastTheModelsOpenEndsAreUnknownNotMisses) {
+  const testing::Scene corridor = {{{-5.0, 0.0}, {40.0, 0.0}}, {{40.0, 2.0}, {-5.0, 2.0}}};
+  const testing::ScannerModel scanner{181, M_PI, 8.0, 0.005};
+  std::mt19937 prng(3);
+  std::vector<Polyline> model;
+  for (const Polyline& p : ExtractPolylines(testing::SimulateScan(corridor, Pose2(0.0, 1.0, 0.0), scanner, prng), {})) {
+    model.push_back(Transform(Pose2(0.0, 1.0, 0.0), p));
+  }
+  std::vector<Point2> samples;
+  for (const Polyline& p : ExtractPolylines(testing::SimulateScan(corridor, Pose2(1.0, 1.0, 0.0), scanner, prng), {})) {
+    for (const Point2& q : SamplePolyline(p, 0.1)) samples.push_back(q);
+  }
+  CandidateSelectionParams params;
+  params.icp_iterations = 0;  // score the candidates where they are
+  const Pose2 truth(1.0, 1.0, 0.0), short_of_it(0.4, 1.0, 0.0);
+  const CandidateSelector misses(model, params);
+  const auto counted = misses.Rank(samples, {truth, short_of_it}, Pose2());
+  ASSERT_EQ(counted.size(), 2u);
+  EXPECT_EQ(counted[0].index, 1);  // short of it fits best
+  EXPECT_GT(counted[0].fit, counted[1].fit + 0.05);
+  params.open_end_m = 1.5;
+  const CandidateSelector unknown(model, params);
+  const auto left_out = unknown.Rank(samples, {truth, short_of_it}, Pose2());
+  ASSERT_EQ(left_out.size(), 2u);
+  for (const RankedCandidate& c : left_out) EXPECT_GT(c.fit, 0.95);
+  EXPECT_NEAR(left_out[0].fit, left_out[1].fit, 0.02);
+  // Off the walls' lines nothing is unknown: a pose 0.5 m aside fits no better than before.
+  const Pose2 aside(1.0, 1.5, 0.0);
+  EXPECT_NEAR(unknown.Rank(samples, {aside}, Pose2())[0].fit, misses.Fit(samples, aside), 0.05);
+}
+
+// The motion prior's penalty is w * ((|t| / sigma_m)^2 + (theta / sigma_rad)^2), at most
+// prior_max_penalty: far from the reference a candidate pays the bound, not more.
+TEST(CandidateSelectorTest, MotionPriorPenaltyIsBounded) {
+  const testing::Scene scene = testing::OfficeRoom();
+  const Pose2 truth(2.5, 2.0, 0.3);
+  const std::vector<Point2> samples = ScanSamples(scene, truth);
+  CandidateSelectionParams params;
+  params.icp_iterations = 0;
+  params.prior_weight = 0.03;
+  params.prior_max_penalty = 0.08;
+  const CandidateSelector selector(SceneModel(scene), params);
+  const Pose2 reference(2.3, 2.0, 0.3);  // 0.2 m away: 0.03 * 0.16 = 0.0048
+  const auto ranked = selector.Rank(samples, {truth, Pose2(4.0, 3.0, 0.3)}, reference);
+  ASSERT_EQ(ranked.size(), 2u);
+  for (const RankedCandidate& c : ranked) {
+    const Pose2 motion = reference.Inverse() * c.T_model_scan;
+    const double e2 = motion.Translation().squaredNorm() / 0.25 + motion.theta * motion.theta / 0.25;
+    EXPECT_NEAR(c.fit - c.score, std::min(0.03 * e2, 0.08), 1e-12);
+  }
+  EXPECT_EQ(ranked[0].index, 0);
+  EXPECT_NEAR(ranked[1].fit - ranked[1].score, 0.08, 1e-12);  // 1.8 m away: bounded
+}
+
 TEST(SelectRefinedTest, TakesTheFirstAcceptedWithinTheBudget) {
   const std::vector<RankedCandidate> ranked = {{Pose2(0, 0, 0), 0.9, 0.9, 0.0, 0},
                                                {Pose2(1, 0, 0), 0.8, 0.8, 0.0, 1},
@@ -147,6 +206,12 @@ TEST(CandidateSelectionParamsTest, InvalidFieldsAreNamed) {
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   params = {};
   params.equally_good_fit = 2.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = {};
+  params.prior_max_penalty = -0.1;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = {};
+  params.open_end_m = std::nan("");
   EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
 

@@ -83,6 +83,9 @@ class SegmentGrid {
   /// Nearest segment within the radius given at construction (segment = -1 if none).
   SegmentMatch Nearest(const Point2& p) const;
 
+  /// The i-th segment given at construction (a match's `segment`).
+  const ModelSegment& Segment(int i) const { return segments_[i]; }
+
  private:
   void Fill();
   int CellIndex(int ix, int iy) const { return iy * nx_ + ix; }
