@@ -9,11 +9,15 @@ namespace shape_slam::internal {
 
 ModelIcp::ModelIcp(const std::vector<Polyline>& model, double capture_m, double inlier_m,
                    double open_end_m)
-    : capture_grid_(MakeModelSegments(model), capture_m),
-      inlier_grid_(MakeModelSegments(model), inlier_m),
+    : ModelIcp(MakeModelSegments(model), capture_m, inlier_m, open_end_m) {}
+
+ModelIcp::ModelIcp(const std::vector<ModelSegment>& segments, double capture_m, double inlier_m,
+                   double open_end_m)
+    : capture_grid_(segments, capture_m),
+      inlier_grid_(segments, inlier_m),
       capture_m_(capture_m),
       inlier_m_(inlier_m) {
-  if (open_end_m > 0.0) open_end_grid_.emplace(MakeModelSegments(model), open_end_m);
+  if (open_end_m > 0.0) open_end_grid_.emplace(segments, open_end_m);
 }
 
 Pose2 ModelIcp::Align(const std::vector<Point2>& samples_scan, const Pose2& T_model_scan,

@@ -33,6 +33,10 @@ class ModelIcp {
   double KnownInlierRatio(const std::vector<Point2>& samples_scan, const Pose2& T_model_scan) const;
 
  private:
+  // The model's segments are made once and copied into each grid.
+  ModelIcp(const std::vector<ModelSegment>& segments, double capture_m, double inlier_m,
+           double open_end_m);
+
   SegmentGrid capture_grid_;
   SegmentGrid inlier_grid_;
   std::optional<SegmentGrid> open_end_grid_;
