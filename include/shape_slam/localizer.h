@@ -24,6 +24,7 @@
 #include <optional>
 #include <vector>
 
+#include "shape_slam/motion_model.h"
 #include "shape_slam/pipeline.h"
 #include "shape_slam/polyline_map.h"
 #include "shape_slam/types.h"
@@ -119,11 +120,14 @@ class Localizer {
 
  private:
   struct Hypothesis {
+    Hypothesis(const Pose2& pose, double evidence_samples, double fit_ratio,
+               const MotionModelParams& motion_model)
+        : T_map_robot(pose), evidence(evidence_samples), fit(fit_ratio), velocity(motion_model) {}
     Pose2 T_map_robot;
     double evidence = 0.0;
     double fit = 0.0;
-    std::vector<Pose2> recent_motions;  // T_prev_cur, for the constant-velocity prediction
-    int misses = 0;                     // consecutive scans without a trusted match
+    ConstantVelocity velocity;  // without odometry, predicts the next motion
+    int misses = 0;             // consecutive scans without a trusted match
     bool tracked = false;  // the pose tracked until a loss: accepted again at min_inlier_ratio
   };
   struct Verified {
@@ -145,7 +149,7 @@ class Localizer {
                          const std::optional<Pose2>& odometry_delta);
   LocalizerReport TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                             const std::optional<Pose2>& odometry_delta);
-  void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot) const;
+  static void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed);
   std::optional<Pose2> OdometryDelta(const LaserScan& scan);
 
   LocalizerParams params_;

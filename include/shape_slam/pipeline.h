@@ -22,6 +22,7 @@
 #include "shape_slam/candidate_selection.h"
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/map_update.h"
+#include "shape_slam/motion_model.h"
 #include "shape_slam/odometry_noise.h"
 #include "shape_slam/evaluation.h"
 #include "shape_slam/loop_closure.h"
@@ -120,8 +121,8 @@ struct ShapeSlamParams {
   /// they make a scan fit best short of its true pose along a corridor, and the constant velocity
   /// then decays to a standstill.
   bool motion_unknown_beyond_ends = true;
-  /// The constant-velocity prediction is the mean motion of this many last scans.
-  int velocity_window = 3;
+  /// Without odometry, the prediction of the next scan's motion (constant velocity).
+  MotionModelParams motion_model;
   double motion_prior_sigma_m = 0.5;     ///< metres
   double motion_prior_sigma_rad = 0.5;   ///< radians
   /// Without odometry, after k consecutive scans without a trusted match the motion bound and
@@ -401,12 +402,12 @@ class ShapeSlam {
   LoopCloser loop_closer_;
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
-  std::vector<Pose2> recent_motions_;  // T_prev_cur of the last scans, for constant velocity
   std::optional<Pose2> last_T_odom_robot_;
   std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
   ShapeSlamParams tracking_params_;      // params_ with the learned odometry noise
+  ConstantVelocity velocity_;            // without odometry, predicts the next motion
   double travel_m_ = 0.0;
   int lost_scans_ = 0;  // consecutive scans without a trusted match
 };

@@ -85,15 +85,6 @@ bool Near(const Pose2& a, const Pose2& b, const LocalizerParams& params) {
   return PosesWithin(a, b, params.distinct_m, params.distinct_rad);
 }
 
-// The mean of the last motions (constant velocity), or nullopt.
-std::optional<Pose2> MeanMotion(const std::vector<Pose2>& motions) {
-  if (motions.empty()) return std::nullopt;
-  Pose2 mean(0.0, 0.0, 0.0);
-  for (const Pose2& m : motions) mean.x += m.x, mean.y += m.y, mean.theta += m.theta;
-  const double n = static_cast<double>(motions.size());
-  return Pose2(mean.x / n, mean.y / n, mean.theta / n);
-}
-
 }  // namespace
 
 void LocalizerParams::Validate() const {
@@ -135,7 +126,7 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
       global_search_(walls_, GlobalSearchParams(params_)) {}
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
-  hypotheses_ = {Hypothesis{T_map_robot, 1.0, 0.0, {}, 0}};
+  hypotheses_ = {Hypothesis(T_map_robot, 1.0, 0.0, params_.stages.motion_model)};
   status_ = LocalizerStatus::kTracking;
   was_localized_ = true;
   drop_scans_ = 0;
@@ -166,7 +157,7 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   std::optional<Pose2> velocity_hint;
   if (odometry_delta) {
     T_map_robot_pred = hypothesis.T_map_robot * *odometry_delta;
-  } else if (const std::optional<Pose2> v = MeanMotion(hypothesis.recent_motions)) {
+  } else if (const std::optional<Pose2> v = hypothesis.velocity.Predict()) {
     velocity_hint = scan.T_robot_sensor.Inverse() * *v * scan.T_robot_sensor;
   }
   const Pose2 T_map_sensor_pred = T_map_robot_pred * scan.T_robot_sensor;
@@ -204,11 +195,8 @@ std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
   return candidates;
 }
 
-void Localizer::Motion(Hypothesis& hypothesis, const Pose2& T_map_robot) const {
-  hypothesis.recent_motions.push_back(hypothesis.T_map_robot.Inverse() * T_map_robot);
-  if (static_cast<int>(hypothesis.recent_motions.size()) > params_.stages.velocity_window) {
-    hypothesis.recent_motions.erase(hypothesis.recent_motions.begin());
-  }
+void Localizer::Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed) {
+  hypothesis.velocity.Add(hypothesis.T_map_robot.Inverse() * T_map_robot, confirmed);
   hypothesis.T_map_robot = T_map_robot;
 }
 
@@ -219,7 +207,7 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
   std::vector<Hypothesis> kept;
   for (Hypothesis& h : hypotheses_) {
     const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, params_.min_inlier_ratio);
-    Motion(h, v.T_map_robot);
+    Motion(h, v.T_map_robot, v.trusted);
     h.fit = v.fit;
     h.evidence = params_.evidence_decay * h.evidence + v.explained;
     h.misses = v.trusted ? 0 : h.misses + 1;
@@ -232,13 +220,15 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
 // the trusted ones not already kept become new hypotheses.
 void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan) {
   for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
-    const Hypothesis probe{candidate, 0.0, 0.0, {}, 0};
+    const Hypothesis probe(candidate, 0.0, 0.0, params_.stages.motion_model);
     const Verified v = Track(shapes, scan, probe, Pose2(), 0, params_.min_inlier_ratio);
     if (!v.trusted) continue;
     const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
       return Near(h.T_map_robot, v.T_map_robot, params_);
     });
-    if (!known) hypotheses_.push_back(Hypothesis{v.T_map_robot, v.explained, v.fit, {}, 0});
+    if (!known) {
+      hypotheses_.push_back(Hypothesis(v.T_map_robot, v.explained, v.fit, params_.stages.motion_model));
+    }
   }
 }
 
@@ -277,7 +267,7 @@ LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& sca
   if (rival) report.status = LocalizerStatus::kAmbiguous;
   const double min_fit = best.tracked ? params_.min_inlier_ratio : params_.min_global_fit;
   if (rival || best.misses > 0 || best.fit < min_fit) return report;
-  hypotheses_.resize(1);
+  hypotheses_.erase(hypotheses_.begin() + 1, hypotheses_.end());
   hypotheses_.front().tracked = false;
   report.hypotheses = 1;
   report.status = status_ = LocalizerStatus::kTracking;
@@ -302,7 +292,7 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
                                      const std::optional<Pose2>& odometry_delta) {
   Hypothesis& h = hypotheses_.front();
   const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit());
-  Motion(h, v.T_map_robot);
+  Motion(h, v.T_map_robot, v.trusted);
   h.fit = v.fit;
   h.evidence = params_.evidence_decay * h.evidence + v.explained;
   h.misses = v.trusted ? 0 : h.misses + 1;

@@ -74,7 +74,7 @@ void ShapeSlamParams::Validate() const {
   Positive(max_turn_per_scan_rad, "ShapeSlamParams::max_turn_per_scan_rad");
   NonNegative(motion_prior_weight, "ShapeSlamParams::motion_prior_weight");
   NonNegative(motion_prior_max_penalty, "ShapeSlamParams::motion_prior_max_penalty");
-  if (velocity_window < 1) throw std::invalid_argument("ShapeSlamParams::velocity_window must be >= 1");
+  motion_model.Validate();
   Positive(motion_prior_sigma_m, "ShapeSlamParams::motion_prior_sigma_m");
   if (!(odometry_check_fit >= 0.0 && odometry_check_fit <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::odometry_check_fit must be in [0, 1]");
@@ -135,7 +135,8 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
       map_(params.index_cell_size_m),
       loop_closer_(params.loop_closure, ToScanMatchParams(params)),
       odometry_noise_(params.odometry_noise),
-      tracking_params_(params) {
+      tracking_params_(params),
+      velocity_(params.motion_model) {
   params_.Validate();
   if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
 }
@@ -184,13 +185,8 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
     const Pose2 delta = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
     prediction.odometry_delta = delta;
     prediction.T_map_robot = *last_T_map_robot_ * delta;
-  } else if (!recent_motions_.empty()) {
-    // Constant velocity: the mean of the last few motions, so that one wrong step (a corridor
-    // matched short) does not stop the prediction.
-    Pose2 mean(0.0, 0.0, 0.0);
-    for (const Pose2& m : recent_motions_) mean.x += m.x, mean.y += m.y, mean.theta += m.theta;
-    const double n = static_cast<double>(recent_motions_.size());
-    prediction.T_pred_robot_velocity = Pose2(mean.x / n, mean.y / n, mean.theta / n);
+  } else {
+    prediction.T_pred_robot_velocity = velocity_.Predict();
   }
   return prediction;
 }
@@ -628,10 +624,7 @@ void ShapeSlam::LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& cor
 void ShapeSlam::UpdateMotion(const Pose2& T_track_robot, bool reset_lost) {
   lost_scans_ = reset_lost ? 0 : lost_scans_ + 1;
   if (!last_T_map_robot_) return;
-  recent_motions_.push_back(last_T_map_robot_->Inverse() * T_track_robot);
-  if (static_cast<int>(recent_motions_.size()) > params_.velocity_window) {
-    recent_motions_.erase(recent_motions_.begin());
-  }
+  velocity_.Add(last_T_map_robot_->Inverse() * T_track_robot, reset_lost);
   travel_m_ += (last_T_map_robot_->Translation() - T_track_robot.Translation()).norm();
 }
 
