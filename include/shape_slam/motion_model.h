@@ -13,9 +13,9 @@ struct MotionModelParams {
   /// The prediction is the mean motion of this many last scans.
   int velocity_window = 3;
   /// The robot's usual speed is the median translation of this many last confirmed motions
-  /// (0: no usual speed). A prediction slower than it that turns less than
-  /// usual_speed_max_turn_rad is brought up to it.
-  int usual_speed_window = 0;
+  /// that turned less than usual_speed_max_turn_rad (0: no usual speed). A prediction slower
+  /// than it that turns less than that is brought up to it.
+  int usual_speed_window = 20;
   double usual_speed_max_turn_rad = 0.2;  ///< radians per scan
 
   /// Throws std::invalid_argument naming the first invalid field.
@@ -35,7 +35,7 @@ class ConstantVelocity {
   std::optional<Pose2> Predict() const;
 
  private:
-  double UsualSpeed() const;  // 0 until enough motions are confirmed
+  double UsualSpeed() const;  // metres per scan; 0 while fewer than 5 motions are confirmed
 
   MotionModelParams params_;
   std::deque<Pose2> recent_motions_;

@@ -29,7 +29,11 @@ void ConstantVelocity::Add(const Pose2& T_prev_cur, bool confirmed) {
   while (static_cast<int>(recent_motions_.size()) > params_.velocity_window) {
     recent_motions_.pop_front();
   }
-  if (!confirmed || params_.usual_speed_window <= 0) return;
+  // Only confirmed motions driving straight: turns on the spot would make the usual speed zero.
+  if (!confirmed || params_.usual_speed_window <= 0 ||
+      !(std::abs(T_prev_cur.theta) < params_.usual_speed_max_turn_rad)) {
+    return;
+  }
   confirmed_speeds_.push_back(T_prev_cur.Translation().norm());
   while (static_cast<int>(confirmed_speeds_.size()) > params_.usual_speed_window) {
     confirmed_speeds_.pop_front();

@@ -1,5 +1,5 @@
 // The constant-velocity motion model (motion_model.h): the mean of the last motions, brought
-// up to the usual speed only while driving straight, from confirmed motions only.
+// up to the usual speed only while driving straight, from confirmed straight motions only.
 #include "shape_slam/motion_model.h"
 
 #include <gtest/gtest.h>
@@ -75,6 +75,18 @@ TEST(ConstantVelocity, OtherwiseThePlainMean) {
   for (int i = 0; i < 10; ++i) unconfirmed.Add(Pose2(1.0, 0.0, 0.0), false);
   for (int i = 0; i < 3; ++i) unconfirmed.Add(Pose2(0.3, 0.0, 0.0), true);
   EXPECT_NEAR(unconfirmed.Predict()->x, 0.3, 1e-12);
+}
+
+// The usual speed is that of driving: confirmed turns on the spot (and other motions turning
+// more than usual_speed_max_turn_rad) do not count, however many.
+TEST(ConstantVelocity, TurnsOnTheSpotDoNotLowerTheUsualSpeed) {
+  ConstantVelocity velocity(UsualSpeed(20));
+  for (int i = 0; i < 6; ++i) velocity.Add(Pose2(1.0, 0.0, 0.0), true);
+  for (int i = 0; i < 30; ++i) velocity.Add(Pose2(0.0, 0.0, 0.5), true);
+  velocity.Add(Pose2(0.2, 0.0, 0.0), true);
+  velocity.Add(Pose2(0.2, 0.0, 0.0), true);
+  velocity.Add(Pose2(0.2, 0.0, 0.0), true);
+  EXPECT_NEAR(velocity.Predict()->x, 1.0, 1e-12);
 }
 
 TEST(MotionModelParams, ValidateNamesTheField) {
