@@ -18,6 +18,11 @@ MotionModelParams UsualSpeed(int window) {
   return p;
 }
 
+// The same motion `times` times over.
+void AddTimes(ConstantVelocity& velocity, int times, const Pose2& motion, bool confirmed) {
+  for (int i = 0; i < times; ++i) velocity.Add(motion, confirmed);
+}
+
 TEST(ConstantVelocity, PredictsTheMeanOfTheLastMotions) {
   ConstantVelocity velocity(UsualSpeed(0));
   EXPECT_FALSE(velocity.Predict().has_value());
@@ -35,7 +40,7 @@ TEST(ConstantVelocity, PredictsTheMeanOfTheLastMotions) {
 // speed (the median: one fast outlier does not move it), in the mean's direction.
 TEST(ConstantVelocity, DrivingStraightKeepsTheUsualSpeed) {
   ConstantVelocity velocity(UsualSpeed(20));
-  for (int i = 0; i < 10; ++i) velocity.Add(Pose2(1.0, 0.0, 0.0), true);
+  AddTimes(velocity, 10, Pose2(1.0, 0.0, 0.0), true);
   velocity.Add(Pose2(5.0, 0.0, 0.0), true);
   velocity.Add(Pose2(0.0, 0.0, 0.05), true);
   velocity.Add(Pose2(0.0, 0.0, -0.05), true);
@@ -46,7 +51,7 @@ TEST(ConstantVelocity, DrivingStraightKeepsTheUsualSpeed) {
   EXPECT_NEAR(p.theta, 0.0, 1e-12);
 
   ConstantVelocity off(UsualSpeed(0));
-  for (int i = 0; i < 10; ++i) off.Add(Pose2(1.0, 0.0, 0.0), true);
+  AddTimes(off, 10, Pose2(1.0, 0.0, 0.0), true);
   off.Add(Pose2(0.0, 0.0, 0.05), true);
   off.Add(Pose2(0.0, 0.0, -0.05), true);
   off.Add(Pose2(0.3, 0.0, 0.0), true);
@@ -56,24 +61,24 @@ TEST(ConstantVelocity, DrivingStraightKeepsTheUsualSpeed) {
 // Turning, standing still, a faster mean, or too few confirmed motions: the plain mean.
 TEST(ConstantVelocity, OtherwiseThePlainMean) {
   ConstantVelocity turning(UsualSpeed(20));
-  for (int i = 0; i < 10; ++i) turning.Add(Pose2(1.0, 0.0, 0.0), true);
-  for (int i = 0; i < 3; ++i) turning.Add(Pose2(0.2, 0.0, 0.5), true);
+  AddTimes(turning, 10, Pose2(1.0, 0.0, 0.0), true);
+  AddTimes(turning, 3, Pose2(0.2, 0.0, 0.5), true);
   EXPECT_NEAR(turning.Predict()->x, 0.2, 1e-12);
 
   ConstantVelocity still(UsualSpeed(20));
-  for (int i = 0; i < 10; ++i) still.Add(Pose2(1.0, 0.0, 0.0), true);
-  for (int i = 0; i < 3; ++i) still.Add(Pose2(0.0, 0.0, 0.0), true);
+  AddTimes(still, 10, Pose2(1.0, 0.0, 0.0), true);
+  AddTimes(still, 3, Pose2(0.0, 0.0, 0.0), true);
   EXPECT_NEAR(still.Predict()->x, 0.0, 1e-12);
 
   ConstantVelocity faster(UsualSpeed(20));
-  for (int i = 0; i < 10; ++i) faster.Add(Pose2(1.0, 0.0, 0.0), true);
-  for (int i = 0; i < 3; ++i) faster.Add(Pose2(1.5, 0.0, 0.0), true);
+  AddTimes(faster, 10, Pose2(1.0, 0.0, 0.0), true);
+  AddTimes(faster, 3, Pose2(1.5, 0.0, 0.0), true);
   EXPECT_NEAR(faster.Predict()->x, 1.5, 1e-12);
 
   // Unconfirmed motions (placed at the prediction while lost) make no usual speed.
   ConstantVelocity unconfirmed(UsualSpeed(20));
-  for (int i = 0; i < 10; ++i) unconfirmed.Add(Pose2(1.0, 0.0, 0.0), false);
-  for (int i = 0; i < 3; ++i) unconfirmed.Add(Pose2(0.3, 0.0, 0.0), true);
+  AddTimes(unconfirmed, 10, Pose2(1.0, 0.0, 0.0), false);
+  AddTimes(unconfirmed, 3, Pose2(0.3, 0.0, 0.0), true);
   EXPECT_NEAR(unconfirmed.Predict()->x, 0.3, 1e-12);
 }
 
@@ -81,8 +86,8 @@ TEST(ConstantVelocity, OtherwiseThePlainMean) {
 // more than usual_speed_max_turn_rad) do not count, however many.
 TEST(ConstantVelocity, TurnsOnTheSpotDoNotLowerTheUsualSpeed) {
   ConstantVelocity velocity(UsualSpeed(20));
-  for (int i = 0; i < 6; ++i) velocity.Add(Pose2(1.0, 0.0, 0.0), true);
-  for (int i = 0; i < 30; ++i) velocity.Add(Pose2(0.0, 0.0, 0.5), true);
+  AddTimes(velocity, 6, Pose2(1.0, 0.0, 0.0), true);
+  AddTimes(velocity, 30, Pose2(0.0, 0.0, 0.5), true);
   velocity.Add(Pose2(0.2, 0.0, 0.0), true);
   velocity.Add(Pose2(0.2, 0.0, 0.0), true);
   velocity.Add(Pose2(0.2, 0.0, 0.0), true);
