@@ -12,6 +12,7 @@
 #include "shape_slam/discrete_curve_evolution.h"
 #include "shape_slam/polyline_extraction.h"
 #include "shape_slam/shape_matcher.h"
+#include "shape_slam/visibility.h"
 
 namespace shape_slam::internal {
 namespace {
@@ -92,6 +93,19 @@ bool FastTrack(const std::vector<Point2>& samples, const std::vector<Polyline>& 
 }
 
 }  // namespace
+
+VisibilityParams ModelVisibility(const LaserScan& scan, bool no_estimate,
+                                 const ShapeSlamParams& params) {
+  VisibilityParams visibility =
+      VisibilityForScan(scan, params.visibility, params.shapes.extraction.min_range_m,
+                        params.visibility_fov_margin_rad);
+  if (no_estimate) {
+    visibility.fov_rad = 2.0 * M_PI;
+    visibility.max_range_m = std::min(params.visibility.max_range_m,
+                                      visibility.max_range_m + params.max_motion_per_scan_m);
+  }
+  return visibility;
+}
 
 // The window search's hypotheses around a centre, in a window scaled by `scale`.
 std::vector<Pose2> WindowCandidates(const std::vector<Polyline>& model,

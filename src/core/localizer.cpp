@@ -70,9 +70,7 @@ WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
 internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
                                   const Pose2& T_map_sensor, bool all_around,
                                   const ShapeSlamParams& p) {
-  VisibilityParams visibility = VisibilityForScan(scan, p.visibility, p.shapes.extraction.min_range_m,
-                                                  p.visibility_fov_margin_rad);
-  if (all_around) visibility.fov_rad = 2.0 * M_PI;
+  const VisibilityParams visibility = internal::ModelVisibility(scan, all_around, p);
   internal::LocalModel model;
   for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility)) {
     model.map.push_back(v.points_sensor);

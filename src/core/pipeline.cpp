@@ -25,15 +25,6 @@ Eigen::Matrix3d UnconfirmedCovariance(const LoopClosureParams& p) {
   return Eigen::Vector3d(m2, m2, p.unconfirmed_sigma_rad * p.unconfirmed_sigma_rad).asDiagonal();
 }
 
-// The visible shape a scan is matched against: around the scan's own field of view, all around
-// when there is no pose estimate (§4.3).
-VisibilityParams VisibilityFor(const LaserScan& scan, bool no_estimate, const ShapeSlamParams& p) {
-  VisibilityParams visibility = VisibilityForScan(scan, p.visibility, p.shapes.extraction.min_range_m,
-                                                  p.visibility_fov_margin_rad);
-  if (no_estimate) visibility.fov_rad = 2.0 * M_PI;
-  return visibility;
-}
-
 }  // namespace
 
 void KeyframeParams::Validate() const {
@@ -234,7 +225,7 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
     const bool front = i == 0;
     std::vector<VisiblePolyline> visible =
         front ? visible_front
-              : submap.map.Visible(T_local_sensor, VisibilityFor(scan, false, params_));
+              : submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
     MapUpdateStats stats = UpdateMap(submap.map, perceived, T_local_sensor, visible, scan,
                                      trusted || submap.map.Empty(), params_.map_update);
     ++submap.num_keyframes;
@@ -475,7 +466,7 @@ internal::Localization ShapeSlam::LocalizeAt(const ScanShapes& shapes, const Las
                                              const std::optional<Pose2>& velocity_hint,
                                              std::vector<Polyline> recent_fine,
                                              std::vector<VisiblePolyline>& visible) const {
-  const VisibilityParams visibility = VisibilityFor(scan, !odometry_delta, params_);
+  const VisibilityParams visibility = internal::ModelVisibility(scan, !odometry_delta, params_);
   visible = TrackingMap().Visible(T_map_sensor_pred, visibility);
   internal::LocalModel model;
   for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
@@ -639,7 +630,7 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   std::vector<Polyline> perceived_map;
   for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
   if (report.keyframe_tracked) {
-    visible = TrackingMap().Visible(T_map_sensor, VisibilityFor(scan, /*no_estimate=*/false, params_));
+    visible = TrackingMap().Visible(T_map_sensor, internal::ModelVisibility(scan, /*no_estimate=*/false, params_));
   } else {
     const Pose2 correction_inverse = loc.correction.Inverse();
     for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);

@@ -1,5 +1,7 @@
 #include "shape_slam/visibility.h"
 
+#include "shape_slam/internal/localization.h"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -101,6 +103,33 @@ TEST(VisibilityTest, DegenerateInputAndDeterminism) {
   VisibilityParams bad;
   bad.max_range_m = -1;
   EXPECT_THROW(empty.See(Pose2(), bad), std::invalid_argument);
+}
+
+// The model a scan is matched against reaches 1 m beyond the scan's farthest reading, around
+// its field of view; without a pose estimate (the last pose predicts the scan) all around, and
+// as much farther as the robot may have driven towards what the scan sees farthest.
+TEST(ModelVisibilityTest, WithoutAnEstimateAllAroundAndAMotionFarther) {
+  LaserScan scan;
+  scan.max_range_m = 30.0;
+  for (int i = 0; i <= 180; ++i) {
+    scan.angles_rad.push_back((i - 90) * M_PI / 180.0);
+    scan.ranges_m.push_back(i == 40 ? 8.0 : (i == 41 ? 30.0 : 5.0));  // 30: no return
+  }
+  ShapeSlamParams params;
+  params.max_motion_per_scan_m = 1.5;
+  const VisibilityParams own = VisibilityForScan(scan, params.visibility,
+                                                 params.shapes.extraction.min_range_m,
+                                                 params.visibility_fov_margin_rad);
+  EXPECT_DOUBLE_EQ(own.max_range_m, 9.0);
+  EXPECT_NEAR(own.fov_rad, M_PI + M_PI / 180.0 + 2.0 * params.visibility_fov_margin_rad, 1e-12);
+  const VisibilityParams predicted = internal::ModelVisibility(scan, false, params);
+  EXPECT_DOUBLE_EQ(predicted.max_range_m, own.max_range_m);
+  EXPECT_DOUBLE_EQ(predicted.fov_rad, own.fov_rad);
+  const VisibilityParams last_pose = internal::ModelVisibility(scan, true, params);
+  EXPECT_DOUBLE_EQ(last_pose.max_range_m, 10.5);
+  EXPECT_DOUBLE_EQ(last_pose.fov_rad, 2.0 * M_PI);
+  params.visibility.max_range_m = 10.0;  // never beyond the configured range
+  EXPECT_DOUBLE_EQ(internal::ModelVisibility(scan, true, params).max_range_m, 10.0);
 }
 
 }  // namespace

@@ -42,6 +42,14 @@ struct Localization {
   bool odometry_overridden = false;  ///< matched without the odometry, which it contradicts
 };
 
+/// The visibility of the model a scan is matched against from a predicted sensor pose
+/// (VisibilityForScan). `no_estimate`: the prediction is only the last pose (no odometry, §4.3),
+/// so the model is seen all around, and max_motion_per_scan_m farther than the scan reaches: a
+/// robot that drove that far towards a wall since the last scan sees it at the scan's farthest
+/// reading, that much beyond it from the last pose.
+VisibilityParams ModelVisibility(const LaserScan& scan, bool no_estimate,
+                                 const ShapeSlamParams& params);
+
 /// Candidates from shape matching against the map and against the last keyframe, the
 /// prediction and (without odometry) the window search, ranked by the candidate selection and
 /// refined in that order. `lost_scans`: consecutive scans before this one that found no trusted
