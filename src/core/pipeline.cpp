@@ -630,7 +630,8 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   std::vector<Polyline> perceived_map;
   for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
   if (report.keyframe_tracked) {
-    visible = TrackingMap().Visible(T_map_sensor, internal::ModelVisibility(scan, /*no_estimate=*/false, params_));
+    visible = TrackingMap().Visible(
+        T_map_sensor, internal::ModelVisibility(scan, /*no_estimate=*/false, params_));
   } else {
     const Pose2 correction_inverse = loc.correction.Inverse();
     for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);

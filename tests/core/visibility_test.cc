@@ -113,7 +113,8 @@ TEST(ModelVisibilityTest, WithoutAnEstimateAllAroundAndAMotionFarther) {
   scan.max_range_m = 30.0;
   for (int i = 0; i <= 180; ++i) {
     scan.angles_rad.push_back((i - 90) * M_PI / 180.0);
-    scan.ranges_m.push_back(i == 40 ? 8.0 : (i == 41 ? 30.0 : 5.0));  // 30: no return
+    // one farthest reading (8 m) and one no-return (30 m)
+    scan.ranges_m.push_back(i == 40 ? 8.0 : (i == 41 ? 30.0 : 5.0));
   }
   ShapeSlamParams params;
   params.max_motion_per_scan_m = 1.5;
