@@ -7,6 +7,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <optional>
 #include <vector>
 
 #include "shape_slam/types.h"
@@ -29,6 +30,11 @@ struct OdometryNoiseParams {
   int learn_min_samples = 20;
   double learn_min_scale = 0.25;
   double learn_max_scale = 4.0;
+  /// A registration teaches the learner only where the scan alone fixes the pose to this
+  /// standard deviation (metres in every direction, radians): along a featureless corridor
+  /// the scan says nothing about the odometry. See ScanOwnCorrection.
+  double learn_max_scan_sigma_m = 0.05;
+  double learn_max_scan_sigma_rad = 0.05;
   /// The odometry prior's tail (PosePrior::loss_sigmas): 0 Gaussian; > 0 a Cauchy loss of this
   /// many standard deviations, so that a glitch or a poor odometry bends a clear scan match
   /// little (issue 22). Off by default while measured: docs/design.md, "Odometry as a prior".
@@ -38,6 +44,20 @@ struct OdometryNoiseParams {
 
 /// Covariance of an odometry increment T_prev_cur (x, y, theta) under the noise model.
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
+
+/// The correction the scan alone would make to the odometry prediction, from the registration
+/// that fused it with the prior: with the scan's information I_s = C^-1 - P^-1 (C the fused
+/// covariance, P the prior's, Gaussian model, prior mean the prediction) the fused correction is
+/// x = C I_s x_s, so x_s = I_s^-1 C^-1 x. The learner must see x_s, not x: the prior pulls x
+/// towards the prediction by I_s / (I_s + P^-1), a learner fed x learns a smaller noise, which
+/// pulls the next x closer still, and the learned noise collapses to learn_min_scale whenever
+/// the odometry is not several times worse than the scan (measured on infinite-corridor:
+/// the scale fell to the floor whatever the floor). nullopt where the scan alone leaves a
+/// direction looser than max_sigma_m / max_sigma_rad, or the covariances are not usable.
+std::optional<Pose2> ScanOwnCorrection(const Pose2& fused_correction,
+                                       const Eigen::Matrix3d& fused_covariance,
+                                       const Eigen::Matrix3d& prior_covariance, double max_sigma_m,
+                                       double max_sigma_rad);
 
 /// The noise model scaled to the log: each trusted registration's correction of the odometry
 /// prediction, normalised by the configured model's sigmas, is one sample; the scale of the

@@ -1,5 +1,7 @@
 #include "shape_slam/odometry_noise.h"
 
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -37,6 +39,34 @@ void OdometryNoiseParams::Validate() const {
     throw std::invalid_argument("OdometryNoiseParams::learn_max_scale must be >= learn_min_scale");
   }
   internal::NonNegative(loss_sigmas, "OdometryNoiseParams::loss_sigmas");
+  internal::Positive(learn_max_scan_sigma_m, "OdometryNoiseParams::learn_max_scan_sigma_m");
+  internal::Positive(learn_max_scan_sigma_rad, "OdometryNoiseParams::learn_max_scan_sigma_rad");
+}
+
+std::optional<Pose2> ScanOwnCorrection(const Pose2& fused_correction,
+                                       const Eigen::Matrix3d& fused_covariance,
+                                       const Eigen::Matrix3d& prior_covariance, double max_sigma_m,
+                                       double max_sigma_rad) {
+  const Eigen::LLT<Eigen::Matrix3d> fused(fused_covariance);  // fails unless positive definite
+  const Eigen::LLT<Eigen::Matrix3d> prior(prior_covariance);
+  if (fused.info() != Eigen::Success || prior.info() != Eigen::Success) return std::nullopt;
+  const Eigen::Matrix3d I = Eigen::Matrix3d::Identity();
+  Eigen::Matrix3d scan_information = fused.solve(I) - prior.solve(I);
+  scan_information = (0.5 * (scan_information + scan_information.transpose())).eval();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(scan_information);
+  if (eig.info() != Eigen::Success || !(eig.eigenvalues().minCoeff() > 0.0)) return std::nullopt;
+  const Eigen::Matrix3d scan_covariance = eig.eigenvectors() *
+                                          eig.eigenvalues().cwiseInverse().asDiagonal() *
+                                          eig.eigenvectors().transpose();
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> xy(scan_covariance.topLeftCorner<2, 2>());
+  if (!(std::sqrt(xy.eigenvalues().maxCoeff()) <= max_sigma_m) ||
+      !(std::sqrt(scan_covariance(2, 2)) <= max_sigma_rad)) {
+    return std::nullopt;
+  }
+  const Eigen::Vector3d x(fused_correction.x, fused_correction.y, fused_correction.theta);
+  const Eigen::Vector3d own = scan_covariance * fused.solve(x);
+  if (!own.allFinite()) return std::nullopt;
+  return Pose2(own.x(), own.y(), own.z());
 }
 
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {

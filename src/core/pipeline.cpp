@@ -529,8 +529,15 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
   const internal::Localization& loc = registration.loc;
-  if (prediction.odometry_delta && loc.trusted && !loc.odometry_overridden) {
-    LearnOdometryNoise(*prediction.odometry_delta, loc.correction);
+  if (params_.odometry_noise.learn && prediction.odometry_delta && loc.trusted &&
+      !loc.odometry_overridden) {
+    // What the scan itself says, not the estimate the prior already pulled (ScanOwnCorrection).
+    const OdometryNoiseParams& noise = tracking_params_.odometry_noise;
+    if (const std::optional<Pose2> own = ScanOwnCorrection(
+            loc.correction, loc.covariance, OdometryCovariance(*prediction.odometry_delta, noise),
+            noise.learn_max_scan_sigma_m, noise.learn_max_scan_sigma_rad)) {
+      LearnOdometryNoise(*prediction.odometry_delta, *own);
+    }
   }
   // Poses in the tracking frame (the local frame with submaps, else the map's).
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
@@ -595,7 +602,7 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
   return r;
 }
 
-// A trusted registration's correction of the odometry's prediction: one sample of the log's
+// A trusted registration's own correction of the odometry's prediction: one sample of the log's
 // odometry noise (OdometryNoiseLearner), which the next scans' prior uses. The prior's weight
 // follows the learned noise; its gate (max_prior_mahalanobis) never gets tighter than the
 // configured model's: a log with good odometry then holds the scans firmly along a corridor,

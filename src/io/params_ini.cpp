@@ -207,6 +207,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"odometry_noise", "learn_min_samples", "... once this many are in", &p.odometry_noise.learn_min_samples},
       {"odometry_noise", "learn_min_scale", "... scaling the sigmas by at least this", &p.odometry_noise.learn_min_scale},
       {"odometry_noise", "learn_max_scale", "... and at most this", &p.odometry_noise.learn_max_scale},
+      {"odometry_noise", "learn_max_scan_sigma_m", "... learning only from matches where the scan alone fixes the position to this (m) ...", &p.odometry_noise.learn_max_scan_sigma_m},
+      {"odometry_noise", "learn_max_scan_sigma_rad", "... and the heading to this (rad)", &p.odometry_noise.learn_max_scan_sigma_rad},
       {"odometry_noise", "loss_sigmas", "heavy-tailed odometry prior: a Cauchy loss of this many standard deviations (0: Gaussian)", &p.odometry_noise.loss_sigmas},
       {"scan_match", "seed_pairs", "scan-to-scan matching without a guess (shape-slam match): most reliable pairs tried", &p.scan_match_seed_pairs},
       {"scan_match", "seeds", "... of which this many go through the second pass", &p.scan_match_seeds},

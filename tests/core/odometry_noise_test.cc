@@ -5,7 +5,9 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Dense>
 #include <cmath>
+#include <optional>
 #include <random>
 #include <stdexcept>
 
@@ -100,6 +102,83 @@ TEST(OdometryNoiseTest, InvalidParamsAreRefused) {
   p = OdometryNoiseParams{};
   p.sigma_xy_m = 0.0;
   EXPECT_THROW(p.Validate(), std::invalid_argument);
+}
+
+// A Gaussian fusion of a scan's own estimate x_s (information Is) with the prior at the
+// prediction (information Ip): x = (Is + Ip)^-1 Is x_s, covariance (Is + Ip)^-1.
+struct Fused {
+  Pose2 correction;
+  Eigen::Matrix3d covariance;
+};
+Fused Fuse(const Eigen::Vector3d& own, const Eigen::Matrix3d& scan_information,
+           const Eigen::Matrix3d& prior_covariance) {
+  const Eigen::Matrix3d covariance = (scan_information + prior_covariance.inverse()).inverse();
+  const Eigen::Vector3d x = covariance * scan_information * own;
+  return {Pose2(x.x(), x.y(), x.z()), covariance};
+}
+
+TEST(OdometryNoiseTest, ScanOwnCorrectionTakesThePriorsPullOut) {
+  const Eigen::Matrix3d prior =
+      Eigen::Vector3d(0.01 * 0.01, 0.02 * 0.02, 0.005 * 0.005).asDiagonal();
+  Eigen::Matrix3d scan_information;
+  scan_information << 4.0e4, 1.0e3, 2.0e3, 1.0e3, 2.0e4, -5.0e2, 2.0e3, -5.0e2, 9.0e4;
+  const Eigen::Vector3d own(0.03, -0.02, 0.01);
+  const Fused fused = Fuse(own, scan_information, prior);
+  // The prior pulled the estimate towards the prediction ...
+  EXPECT_LT(std::abs(fused.correction.x), 0.9 * own.x());
+  // ... and the scan's own estimate is recovered.
+  const std::optional<Pose2> recovered =
+      ScanOwnCorrection(fused.correction, fused.covariance, prior, 0.05, 0.05);
+  ASSERT_TRUE(recovered.has_value());
+  EXPECT_NEAR(recovered->x, own.x(), 1e-9);
+  EXPECT_NEAR(recovered->y, own.y(), 1e-9);
+  EXPECT_NEAR(recovered->theta, own.z(), 1e-9);
+}
+
+TEST(OdometryNoiseTest, ScanOwnCorrectionNoneWhereTheScanIsBlindOrInvalid) {
+  const Eigen::Matrix3d prior =
+      Eigen::Vector3d(0.01 * 0.01, 0.01 * 0.01, 0.005 * 0.005).asDiagonal();
+  // A corridor along x: the scan fixes y and the heading, x only to 1 m.
+  const Eigen::Matrix3d corridor = Eigen::Vector3d(1.0, 1.0e4, 1.0e5).asDiagonal();
+  const Fused fused = Fuse(Eigen::Vector3d(0.0, 0.01, 0.0), corridor, prior);
+  EXPECT_FALSE(ScanOwnCorrection(fused.correction, fused.covariance, prior, 0.05, 0.05));
+  EXPECT_TRUE(ScanOwnCorrection(fused.correction, fused.covariance, prior, 2.0, 0.05));
+  // Covariances that are not positive definite, or a fused one looser than the prior alone.
+  EXPECT_FALSE(ScanOwnCorrection(Pose2(), Eigen::Matrix3d::Zero(), prior, 0.05, 0.05));
+  EXPECT_FALSE(ScanOwnCorrection(Pose2(), prior, Eigen::Matrix3d::Zero(), 0.05, 0.05));
+  EXPECT_FALSE(ScanOwnCorrection(Pose2(), 2.0 * prior, prior, 0.05, 0.05));
+}
+
+// The learning loop of the mapper in one dimension (heading): each scan's estimate fuses the
+// scan's own (noise s) with the odometry (true noise t) under the learned prior. Fed the fused
+// corrections, the learner collapses to its floor although the odometry is as noisy as the
+// scan; fed the scan's own, it learns the spread of scan minus odometry.
+TEST(OdometryNoiseTest, LearningFromTheScansOwnCorrectionDoesNotCollapse) {
+  OdometryNoiseParams p = Learning();
+  p.learn_min_scale = 0.001;
+  p.learn_max_scale = 1000.0;
+  const Pose2 step(1.0, 0.0, 0.0);
+  const double configured = std::sqrt(OdometryCovariance(step, p)(2, 2));
+  const double s = 0.005, t = 0.005;  // radians: scan and odometry equally noisy
+  for (const bool own : {false, true}) {
+    OdometryNoiseLearner learner(p);
+    std::mt19937 prng(7);
+    std::normal_distribution<double> scan_noise(0.0, s), odometry_noise(0.0, t);
+    for (int i = 0; i < 2000; ++i) {
+      const double prior_sigma = std::sqrt(OdometryCovariance(step, learner.Current())(2, 2));
+      const double truth = odometry_noise(prng);  // the true motion off the odometry's
+      const double scan = truth + scan_noise(prng);
+      const double w = prior_sigma * prior_sigma / (prior_sigma * prior_sigma + s * s);
+      const double fused = w * scan;  // prior at 0, the prediction
+      learner.Add(step, Pose2(0.0, 0.0, own ? scan : fused));
+    }
+    const double learned = learner.RotationScale() * configured;
+    if (own) {
+      EXPECT_NEAR(learned, std::hypot(s, t), 0.25 * std::hypot(s, t));
+    } else {
+      EXPECT_LT(learned, 0.1 * t);  // the collapse this guards against
+    }
+  }
 }
 
 }  // namespace
