@@ -78,7 +78,11 @@ ArgParser MakeParser() {
           "  stats.json       scans, wall time, per-scan times, map size, log issues\n"
           "  scan_times.csv   per laser scan: scan index, timestamp, processing time (ms), how it was\n"
           "                   placed (keyframe_track, fast_track, shape_match, unmatched), keyframe (1:\n"
-          "                   it updated the map)\n\n"
+          "                   it updated the map)\n"
+          "  loops.csv        per loop closure found: the keyframes (index, timestamp), what\n"
+          "                   became of it (agreed, taken, pending, confirmed, refused), the\n"
+          "                   edge, the correction it asked, its fit both ways, the graph\n"
+          "                   distance (bench/tools/loop_errors.py scores it)\n\n"
           "Continuing a map (--map MAP): MAP is loaded and is the starting map; the new scans\n"
           "extend it (its polylines are merged with what they see, as in mapping) and the\n"
           "output map holds both. The first scan is placed by the global search of 'shape-slam\n"
@@ -291,6 +295,32 @@ std::string FormatScanTimes(const RunOutput& out) {
   return csv.str();
 }
 
+// Every loop closure found, what became of it (LoopDecision) and its numbers; keyframes by
+// index and by their scans' timestamps (bench/tools/loop_errors.py scores them against
+// reference poses).
+std::string FormatLoops(const ShapeSlam& slam) {
+  std::ostringstream csv;
+  csv << "new_keyframe,old_keyframe,new_timestamp_s,old_timestamp_s,decision,edge_x_m,edge_y_m,"
+         "edge_theta_rad,correction_m,correction_rad,inlier_ratio,reverse_inlier_ratio,"
+         "graph_distance_m\n"
+      << std::fixed;
+  const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
+  const auto stamp = [&](int k) {
+    return k >= 0 && k < static_cast<int>(keyframes.size()) ? keyframes[k].scan.timestamp_s : 0.0;
+  };
+  for (const LoopEvent& event : slam.LoopEvents()) {
+    const LoopClosure& c = event.closure;
+    csv << c.new_keyframe << ',' << c.old_keyframe << ',' << std::setprecision(6)
+        << stamp(c.new_keyframe) << ',' << stamp(c.old_keyframe) << ','
+        << LoopDecisionName(event.decision) << ',' << c.edge.T_from_to.x << ','
+        << c.edge.T_from_to.y << ',' << c.edge.T_from_to.theta << ','
+        << c.correction.Translation().norm() << ',' << c.correction.theta << ','
+        << std::setprecision(4) << c.inlier_ratio << ',' << c.reverse_inlier_ratio << ','
+        << std::setprecision(2) << c.graph_distance_m << '\n';
+  }
+  return csv.str();
+}
+
 std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t map_file_bytes,
                       double wall_s, const io::LogReader& reader, const ShapeSlamParams& params,
                       const OdometryReport& odometry, const std::optional<MapStart>& start) {
@@ -401,6 +431,7 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
   }
   StageGridOutputs(slam, grids, stage);
   stage("scan_times.csv", FormatScanTimes(out));
+  stage("loops.csv", FormatLoops(slam));
   stage("stats.json", stats_json);
   files.Commit();
   return names;

@@ -184,6 +184,24 @@ struct LoopClosure {
   double graph_distance_m = 0.0;  ///< along the graph between the two keyframes, when found
 };
 
+/// What became of a closure a search found (LoopCloser::Events).
+enum class LoopDecision {
+  kAgreed,     ///< agreed with the graph already: added, nothing to correct
+  kTaken,      ///< strong (strong_inlier_ratio both ways, small correction): added at once
+  kPending,    ///< waits for a second closure that agrees with it
+  kConfirmed,  ///< added with the closures it agrees with (a pending one is listed again)
+  kRefused,    ///< with it the graph broke earlier closures (BreaksEarlierLoops): dropped
+};
+
+/// The name of a decision as loops.csv writes it ("agreed", "taken", ...).
+const char* LoopDecisionName(LoopDecision decision);
+
+/// One closure found by a search, and what became of it.
+struct LoopEvent {
+  LoopClosure closure;
+  LoopDecision decision = LoopDecision::kPending;
+};
+
 struct RankedCandidate;  // candidate_selection.h
 
 class LoopCloser {
@@ -204,6 +222,9 @@ class LoopCloser {
   int NumFound() const { return num_found_; }
   /// Groups of closures refused because the graph with them broke earlier closures.
   int NumRejected() const { return num_rejected_; }
+  /// Every closure found so far and what became of it, in order (a pending closure that a
+  /// later one confirms is listed twice): the record that says which closures bent the map.
+  const std::vector<LoopEvent>& Events() const { return events_; }
 
   /// The candidates of a search for the last keyframe, best first (exposed for tests).
   std::vector<int> Candidates(const std::vector<LoopKeyframe>& keyframes,
@@ -251,6 +272,7 @@ class LoopCloser {
   LoopClosureParams params_;
   ScanMatchParams match_;
   std::vector<LoopClosure> pending_;
+  std::vector<LoopEvent> events_;
   int round_robin_ = 0;  // turn of the candidates after the best-ranked one (Update advances it)
   int num_accepted_ = 0;
   int num_searches_ = 0;

@@ -278,6 +278,9 @@ class ShapeSlam {
   /// Loop searches run so far, and closures they found before the consistency check.
   int NumLoopSearches() const { return loop_closer_.NumSearches(); }
   int NumLoopClosuresFound() const { return loop_closer_.NumFound(); }
+  /// Every loop closure found and what became of it (LoopCloser::Events); keyframe indices as
+  /// in Keyframes().
+  const std::vector<LoopEvent>& LoopEvents() const { return loop_closer_.Events(); }
   /// Map rebuilds after a pose-graph optimisation moved keyframes, and the keyframes they
   /// inserted again (the cost of keeping the map consistent with the graph).
   int NumMapRebuilds() const { return num_rebuilds_; }

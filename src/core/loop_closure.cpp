@@ -193,6 +193,17 @@ Eigen::Matrix3d EdgeCovariance(const Eigen::Matrix3d& refined, const LoopClosure
   return c;
 }
 
+const char* LoopDecisionName(LoopDecision decision) {
+  switch (decision) {
+    case LoopDecision::kAgreed: return "agreed";
+    case LoopDecision::kTaken: return "taken";
+    case LoopDecision::kPending: return "pending";
+    case LoopDecision::kConfirmed: return "confirmed";
+    case LoopDecision::kRefused: return "refused";
+  }
+  return "unknown";
+}
+
 LoopCloser::LoopCloser(const LoopClosureParams& params, const ScanMatchParams& match)
     : params_(params), match_(match) {
   params_.Validate();
@@ -534,6 +545,7 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
   const double moved = c.Translation().norm();
   if (moved <= params_.min_correction_m && std::abs(c.theta) <= params_.min_correction_rad) {
     graph.AddEdge(loop->edge);  // agrees with the graph: one more constraint, nothing to correct
+    events_.push_back({*loop, LoopDecision::kAgreed});
     ++num_accepted_;
     return false;
   }
@@ -547,17 +559,22 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
       if (Consistent(p, *loop, keyframes, graph)) accepted.push_back(p);
     }
     if (accepted.empty()) {
+      events_.push_back({*loop, LoopDecision::kPending});
       pending_.push_back(*loop);
       return false;
     }
   }
   accepted.push_back(*loop);
   if (BreaksEarlierLoops(graph, accepted)) {
+    for (const LoopClosure& a : accepted) events_.push_back({a, LoopDecision::kRefused});
     ++num_rejected_;
     pending_.clear();
     return false;
   }
-  for (const LoopClosure& a : accepted) graph.AddEdge(a.edge);
+  for (const LoopClosure& a : accepted) {
+    graph.AddEdge(a.edge);
+    events_.push_back({a, strong ? LoopDecision::kTaken : LoopDecision::kConfirmed});
+  }
   num_accepted_ += static_cast<int>(accepted.size());
   pending_.clear();
   return true;

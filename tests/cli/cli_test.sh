@@ -43,12 +43,21 @@ expect 0 "" -- "$BIN" run "$WORK/pairs.rawlog" --out "$WORK/pairs" --quiet
 expect 2 "neither observations nor pairs" -- "$BIN" convert "$LOG" "$WORK/x.rawlog" --format xyz
 expect 0 "" -- "$BIN" run "$WORK/head.rawlog" --out "$WORK/head" --quiet
 for f in trajectory.tum map.polylines map.svg map.png map.pgm map.yaml map.gridmap map.simplemap \
-  scan_times.csv stats.json; do
+  scan_times.csv loops.csv stats.json; do
   [ -s "$WORK/head/$f" ] || fail "run did not write $f"
 done
 [ "$(head -n 1 "$WORK/head/scan_times.csv")" = "scan,timestamp_s,ms,track,keyframe" ] || fail "scan_times.csv header"
 [ "$(($(wc -l < "$WORK/head/scan_times.csv") - 1))" = "$(grep -vc "^#" "$WORK/head/trajectory.tum")" ] ||
   fail "scan_times.csv: not one line per scan"
+head -n 1 "$WORK/head/loops.csv" | grep -q "^new_keyframe,old_keyframe,new_timestamp_s,old_timestamp_s,decision," ||
+  fail "loops.csv header"
+# bench/tools/loop_errors.py reads it (the run's own trajectory standing in for the reference).
+TOOLS="$DATA/../../bench/tools"
+expect 0 "wrong closures in the graph: " -- python3 "$TOOLS/loop_errors.py" "$WORK/head/loops.csv" \
+  "$WORK/head/trajectory.tum" --max-dt 0.01
+expect 2 "loop_errors: .*no-such" -- python3 "$TOOLS/loop_errors.py" "$WORK/no-such.csv" \
+  "$WORK/head/trajectory.tum"
+expect 0 "usage: loop_errors.py" -- python3 "$TOOLS/loop_errors.py" --help
 head -c 2 "$WORK/head/map.pgm" | grep -q P5 || fail "map.pgm is not a binary PGM"
 grep -qx "image: map.pgm" "$WORK/head/map.yaml" || fail "map.yaml does not name map.pgm"
 grep -qx "resolution: 0.05" "$WORK/head/map.yaml" || fail "map.yaml: default resolution not 0.05"

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -89,6 +90,7 @@ struct Result {
   double rmse_after = 0.0;
   PoseGraph graph;
   std::vector<Pose2> truth;
+  std::vector<LoopEvent> events;
 };
 
 // Feeds the drive to a LoopCloser keyframe by keyframe, optimising whenever it asks and once
@@ -124,6 +126,7 @@ Result CloseLoops(const Scene& world, const Drive& drive, unsigned seed,
   for (int n = 0; n < r.graph.NumNodes(); ++n) optimised.push_back(r.graph.Node(n));
   r.rmse_after = PositionRmse(optimised, drive.truth);
   r.closures = closer.NumLoopClosures();
+  r.events = closer.Events();
   r.truth = drive.truth;
   return r;
 }
@@ -165,6 +168,45 @@ TEST(LoopClosureTest, ClosesALargeLoopWithGrowingDrift) {
   EXPECT_LT(r.rmse_after, 0.2 * r.rmse_before);   // ... and most of the drift is gone
   EXPECT_LT(r.rmse_after, 1.0) << "before " << r.rmse_before;
   ExpectLoopEdgesRight(r);
+}
+
+// The record of the closures (loops.csv): every loop edge in the graph is one event that put
+// it there, with the same edge; every pending closure was found before it was confirmed.
+TEST(LoopClosureTest, EventsRecordEveryClosureAndItsFate) {
+  const Result r = CloseLoops(LargeLoopWorld(), LargeLoopDrive(), 2);
+  ASSERT_GE(r.closures, 2);
+  std::vector<const LoopEvent*> added;
+  for (const LoopEvent& e : r.events) {
+    if (e.decision == LoopDecision::kAgreed || e.decision == LoopDecision::kTaken ||
+        e.decision == LoopDecision::kConfirmed) {
+      added.push_back(&e);
+    }
+    EXPECT_LT(e.closure.old_keyframe, e.closure.new_keyframe);
+  }
+  ASSERT_EQ(static_cast<int>(added.size()), r.closures);
+  std::size_t next = 0;
+  for (const PoseGraphEdge& edge : r.graph.Edges()) {
+    if (!edge.loop) continue;
+    ASSERT_LT(next, added.size());
+    const PoseGraphEdge& recorded = added[next++]->closure.edge;
+    EXPECT_EQ(recorded.from, edge.from);
+    EXPECT_EQ(recorded.to, edge.to);
+    EXPECT_DOUBLE_EQ(recorded.T_from_to.x, edge.T_from_to.x);
+    EXPECT_DOUBLE_EQ(recorded.T_from_to.theta, edge.T_from_to.theta);
+  }
+  EXPECT_EQ(next, added.size());
+  for (std::size_t i = 0; i < r.events.size(); ++i) {
+    if (r.events[i].decision != LoopDecision::kConfirmed) continue;
+    const int key = r.events[i].closure.new_keyframe;
+    const bool found_earlier =
+        std::any_of(r.events.begin(), r.events.begin() + i, [&](const LoopEvent& e) {
+          return e.decision == LoopDecision::kPending && e.closure.new_keyframe == key;
+        });
+    const bool last_of_group =
+        i + 1 == r.events.size() || r.events[i + 1].decision != LoopDecision::kConfirmed;
+    EXPECT_TRUE(found_earlier || last_of_group) << "event " << i;
+  }
+  EXPECT_STREQ(LoopDecisionName(LoopDecision::kRefused), "refused");
 }
 
 // The loop above needs the full search (the estimate is metres off when the robot returns).
