@@ -15,41 +15,27 @@ ones that bent the map.
 Exit status: 0, or 2 on unreadable input. Standard library only.
 """
 import argparse
+import bisect
 import csv
 import json
 import math
+import os
 import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import trajectories  # noqa: E402  (bench/tools, beside this script)
 
 ACCEPTED = ("agreed", "taken", "confirmed")
 DECISIONS = ("agreed", "taken", "pending", "confirmed", "refused")
 
 
 def read_reference(path):
-    """{timestamp: (x, y, theta)} from 't x y theta' lines or TUM lines ('#' comments)."""
-    poses = {}
-    with open(path, encoding="utf-8") as f:
-        for number, line in enumerate(f, 1):
-            fields = line.split()
-            if not fields or fields[0].startswith("#"):
-                continue
-            try:
-                values = [float(v) for v in fields]
-            except ValueError:
-                raise ValueError(f"{path}:{number}: not numbers") from None
-            if len(values) == 4:
-                t, x, y, theta = values
-            elif len(values) == 8:
-                t, x, y, qz, qw = values[0], values[1], values[2], values[6], values[7]
-                theta = 2.0 * math.atan2(qz, qw)
-            else:
-                raise ValueError(f"{path}:{number}: expected 4 or 8 fields")
-            poses[t] = (x, y, theta)
-    return poses
+    """{timestamp: (x, y, theta)} from 't x y theta' or TUM lines (trajectories.read_poses)."""
+    return {t: (x, y, theta) for t, x, y, theta in trajectories.read_poses(path)}
 
 
 def lookup(poses, stamps, t, max_dt):
     """The reference pose nearest to t within max_dt seconds, or None."""
-    import bisect
     i = bisect.bisect_left(stamps, t)
     best = None
     for j in (i - 1, i):
@@ -102,7 +88,7 @@ def main(argv):
     args = parser.parse_args(argv)
     try:
         rows = score(args.loops, args.reference, args.max_m, args.max_deg, args.max_dt)
-    except (OSError, ValueError, KeyError) as e:
+    except (OSError, ValueError, KeyError, trajectories.TrajectoryError) as e:
         print(f"loop_errors: {e}", file=sys.stderr)
         return 2
     counts = {d: {"closures": 0, "wrong": 0, "no_reference": 0} for d in DECISIONS}
