@@ -126,6 +126,8 @@ void LoopClosureParams::Validate() const {
   if (max_candidates < 1) throw std::invalid_argument("LoopClosureParams::max_candidates must be >= 1");
   NonNegative(submap_travel_m, "LoopClosureParams::submap_travel_m");
   NonNegative(submap_step_m, "LoopClosureParams::submap_step_m");
+  NonNegative(ambiguity_m, "LoopClosureParams::ambiguity_m");
+  Fraction(ambiguity_fit_margin, "LoopClosureParams::ambiguity_fit_margin");
   Positive(window_half_m, "LoopClosureParams::window_half_m");
   Positive(window_resolution_m, "LoopClosureParams::window_resolution_m");
   if (window_max_evaluations < 1) {
@@ -200,6 +202,7 @@ const char* LoopDecisionName(LoopDecision decision) {
     case LoopDecision::kPending: return "pending";
     case LoopDecision::kConfirmed: return "confirmed";
     case LoopDecision::kRefused: return "refused";
+    case LoopDecision::kAmbiguous: return "ambiguous";
   }
   return "unknown";
 }
@@ -502,10 +505,34 @@ std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& k
     if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = std::move(candidate);
   };
   for (const auto& s : sides) keep_best(QuickMatch(*s, graph));
-  if (!loop) {
-    for (const auto& s : sides) keep_best(FullMatch(*s, graph));
+  if (loop) return loop;
+  std::vector<ImpliedPose> implied;  // the new keyframe's pose in the graph, as each match puts it
+  for (const auto& s : sides) {
+    std::optional<LoopClosure> candidate = FullMatch(*s, graph);
+    if (candidate) {
+      implied.push_back({graph.Node(s->then.node) * candidate->edge.T_from_to, candidate->inlier_ratio});
+    }
+    keep_best(std::move(candidate));
+  }
+  if (loop && AmbiguousMatches(implied, params_.ambiguity_m, params_.ambiguity_fit_margin)) {
+    events_.push_back({*loop, LoopDecision::kAmbiguous});
+    ++num_ambiguous_;
+    return std::nullopt;
   }
   return loop;
+}
+
+bool AmbiguousMatches(const std::vector<ImpliedPose>& implied, double ambiguity_m,
+                      double fit_margin) {
+  if (ambiguity_m <= 0.0 || implied.empty()) return false;
+  const ImpliedPose& best = *std::max_element(
+      implied.begin(), implied.end(),
+      [](const ImpliedPose& a, const ImpliedPose& b) { return a.fit < b.fit; });
+  return std::any_of(implied.begin(), implied.end(), [&](const ImpliedPose& other) {
+    return other.fit >= best.fit - fit_margin &&
+           (other.T_graph_keyframe.Translation() - best.T_graph_keyframe.Translation()).norm() >
+               ambiguity_m;
+  });
 }
 
 // The closures already in the graph vote on the new ones: the graph optimised with them must

@@ -156,6 +156,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "max_view_angle_rad", "... and seen from within this heading difference (rad) ...", &p.loop_closure.max_view_angle_rad},
       {"loop_closure", "view_angle_per_m", "... plus this per metre of pose-graph distance (rad/m; up to pi)", &p.loop_closure.view_angle_per_m},
       {"loop_closure", "max_candidates", "old places tried per search: the best-ranked, then the others in turn", &p.loop_closure.max_candidates},
+      {"loop_closure", "ambiguity_m", "a search closes no loop when a match against another place puts the keyframe farther than this from the best match (m; 0: off) ...", &p.loop_closure.ambiguity_m},
+      {"loop_closure", "ambiguity_fit_margin", "... and fits within this of the best (inlier ratio)", &p.loop_closure.ambiguity_fit_margin},
       {"loop_closure", "submap_travel_m", "an old place: the candidate and the keyframes within this much driving of it (m) ...", &p.loop_closure.submap_travel_m},
       {"loop_closure", "submap_step_m", "... one every this much driving (m)", &p.loop_closure.submap_step_m},
       {"loop_closure", "window_half_m", "window search over the old place: half window at most (m)", &p.loop_closure.window_half_m},

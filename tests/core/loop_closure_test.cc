@@ -209,6 +209,27 @@ TEST(LoopClosureTest, EventsRecordEveryClosureAndItsFate) {
   EXPECT_STREQ(LoopDecisionName(LoopDecision::kRefused), "refused");
 }
 
+TEST(LoopClosureTest, MatchesThatPutTheKeyframeApartAreAmbiguous) {
+  const std::vector<ImpliedPose> agree = {{Pose2(10.0, 2.0, 0.1), 0.95},
+                                          {Pose2(10.3, 2.2, 0.12), 0.9},
+                                          {Pose2(9.8, 2.1, 0.1), 0.8}};
+  EXPECT_FALSE(AmbiguousMatches(agree, 1.0, 0.1));
+  EXPECT_FALSE(AmbiguousMatches({agree[0]}, 1.0, 0.1));
+  EXPECT_FALSE(AmbiguousMatches({}, 1.0, 0.1));
+  // A look-alike place one corridor period on, fitting nearly as well: ambiguous ...
+  std::vector<ImpliedPose> apart = agree;
+  apart.push_back({Pose2(25.0, 2.0, 0.1), 0.9});
+  EXPECT_TRUE(AmbiguousMatches(apart, 1.0, 0.1));
+  EXPECT_FALSE(AmbiguousMatches(apart, 0.0, 0.1));  // off
+  // ... fitting clearly worse than the best: not.
+  apart.back().fit = 0.8;
+  EXPECT_FALSE(AmbiguousMatches(apart, 1.0, 0.1));
+  // The best is the one that fits best, wherever it lies.
+  apart.back().fit = 1.0;
+  EXPECT_TRUE(AmbiguousMatches(apart, 1.0, 0.1));
+  EXPECT_STREQ(LoopDecisionName(LoopDecision::kAmbiguous), "ambiguous");
+}
+
 // The loop above needs the full search (the estimate is metres off when the robot returns).
 // On the second lap boxes stand along the first corridor, which the old place does not have:
 // the scans fit it only in part. The loop closes with the default refine_min_fit and stays open
