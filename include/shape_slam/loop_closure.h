@@ -10,8 +10,9 @@
 //                 may exceed what a guess-based match tolerates) and with the estimate as guess,
 //                 each finished by the Ceres refinement (alignment_refinement.h);
 //   verification  both sides must explain each other (inlier ratios both ways), the match must
-//                 constrain every direction (no closure along a featureless corridor), and the
-//                 correction it asks of the graph must lie within the uncertainty;
+//                 constrain every direction (no closure along a featureless corridor), the
+//                 correction it asks of the graph must lie within the uncertainty, and no other
+//                 place of the same search may fit nearly as well elsewhere (look-alike places);
 //   acceptance    a closure that corrects the graph by more than the base bound waits until
 //                 another one agrees with it: the cycle the two form through the graph must close
 //                 within a tolerance that grows with the length of its chains (pairwise

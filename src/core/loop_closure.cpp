@@ -490,7 +490,8 @@ bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
 
 // One Dijkstra per search serves the candidates and their matches. The quick check at every
 // candidate first: where one passes, the graph is right there and the full searches of the
-// others would only find the same. The best fit wins.
+// others would only find the same. The best fit wins, unless another place fits nearly as
+// well somewhere else (AmbiguousMatches, LoopClosureParams::ambiguity_m).
 std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& keyframes,
                                               const PoseGraph& graph, int current) {
   std::optional<LoopClosure> loop;
@@ -510,7 +511,8 @@ std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& k
   for (const auto& s : sides) {
     std::optional<LoopClosure> candidate = FullMatch(*s, graph);
     if (candidate) {
-      implied.push_back({graph.Node(s->then.node) * candidate->edge.T_from_to, candidate->inlier_ratio});
+      implied.push_back(
+          {graph.Node(s->then.node) * candidate->edge.T_from_to, candidate->inlier_ratio});
     }
     keep_best(std::move(candidate));
   }
