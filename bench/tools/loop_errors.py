@@ -15,7 +15,6 @@ ones that bent the map.
 Exit status: 0, or 2 on unreadable input. Standard library only.
 """
 import argparse
-import bisect
 import csv
 import json
 import math
@@ -24,50 +23,32 @@ import sys
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import trajectories  # noqa: E402  (bench/tools, beside this script)
+import variants  # noqa: E402
 
 ACCEPTED = ("agreed", "taken", "confirmed")
-DECISIONS = ("agreed", "taken", "pending", "confirmed", "refused")
-
-
-def read_reference(path):
-    """{timestamp: (x, y, theta)} from 't x y theta' or TUM lines (trajectories.read_poses)."""
-    return {t: (x, y, theta) for t, x, y, theta in trajectories.read_poses(path)}
-
-
-def lookup(poses, stamps, t, max_dt):
-    """The reference pose nearest to t within max_dt seconds, or None."""
-    i = bisect.bisect_left(stamps, t)
-    best = None
-    for j in (i - 1, i):
-        if 0 <= j < len(stamps) and abs(stamps[j] - t) <= max_dt:
-            if best is None or abs(stamps[j] - t) < abs(best - t):
-                best = stamps[j]
-    return None if best is None else poses[best]
-
-
-def relative(a, b):
-    """a^-1 * b for 2D poses (x, y, theta)."""
-    c, s = math.cos(a[2]), math.sin(a[2])
-    dx, dy = b[0] - a[0], b[1] - a[1]
-    return (c * dx + s * dy, -s * dx + c * dy, math.remainder(b[2] - a[2], 2.0 * math.pi))
+DECISIONS = ("agreed", "taken", "pending", "confirmed", "refused", "ambiguous")
 
 
 def score(loops_path, reference_path, max_m, max_deg, max_dt):
-    poses = read_reference(reference_path)
-    stamps = sorted(poses)
-    rows = []
+    reference = trajectories.read_poses(reference_path)
     with open(loops_path, encoding="utf-8", newline="") as f:
-        for row in csv.DictReader(f):
-            old = lookup(poses, stamps, float(row["old_timestamp_s"]), max_dt)
-            new = lookup(poses, stamps, float(row["new_timestamp_s"]), max_dt)
-            error = None
-            if old is not None and new is not None:
-                truth = relative(old, new)
-                edge = (float(row["edge_x_m"]), float(row["edge_y_m"]), float(row["edge_theta_rad"]))
-                e = relative(truth, edge)
-                error = (math.hypot(e[0], e[1]), abs(math.degrees(e[2])))
-            wrong = error is not None and (error[0] > max_m or error[1] > max_deg)
-            rows.append((row, error, wrong))
+        loops = list(csv.DictReader(f))
+    # The reference pose of each closure's two keyframes, associated as `eval` does.
+    queries = [(float(row[f"{side}_timestamp_s"]), k, side)
+               for k, row in enumerate(loops) for side in ("old", "new")]
+    found = {(q[1], q[2]): pose[1:]
+             for pose, q in trajectories.associate(reference, queries, max_dt)}
+    rows = []
+    for k, row in enumerate(loops):
+        old, new = found.get((k, "old")), found.get((k, "new"))
+        error = None
+        if old is not None and new is not None:
+            truth = variants.between(old, new)
+            edge = (float(row["edge_x_m"]), float(row["edge_y_m"]), float(row["edge_theta_rad"]))
+            e = variants.between(truth, edge)
+            error = (math.hypot(e[0], e[1]), abs(math.degrees(e[2])))
+        wrong = error is not None and (error[0] > max_m or error[1] > max_deg)
+        rows.append((row, error, wrong))
     return rows
 
 
