@@ -298,13 +298,13 @@ std::string FormatScanTimes(const RunOutput& out) {
 // Every loop closure found, what became of it (LoopDecision) and its numbers; keyframes by
 // index and by their scans' timestamps (bench/tools/loop_errors.py scores them against
 // reference poses).
-std::string FormatLoops(const ShapeSlam& slam) {
+std::string FormatLoops(const ShapeSlam& slam,
+                        const std::vector<ShapeSlam::KeyframeView>& keyframes) {
   std::ostringstream csv;
   csv << "new_keyframe,old_keyframe,new_timestamp_s,old_timestamp_s,decision,edge_x_m,edge_y_m,"
          "edge_theta_rad,correction_m,correction_rad,inlier_ratio,reverse_inlier_ratio,"
          "graph_distance_m\n"
       << std::fixed;
-  const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
   const auto stamp = [&](int k) {
     return k >= 0 && k < static_cast<int>(keyframes.size()) ? keyframes[k].scan.timestamp_s : 0.0;
   };
@@ -385,8 +385,8 @@ struct GridOutputs {
 // (after the last pose-graph optimisation) and the map's polylines, each handed to
 // stage(name, content) as soon as it is rendered.
 template <typename Stage>
-void StageGridOutputs(const ShapeSlam& slam, const GridOutputs& what, const Stage& stage) {
-  const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
+void StageGridOutputs(const ShapeSlam& slam, const std::vector<ShapeSlam::KeyframeView>& keyframes,
+                      const GridOutputs& what, const Stage& stage) {
   if (what.ros || what.gridmap) {
     std::vector<Polyline> walls;
     for (const PolylineId id : slam.Map().Ids()) walls.push_back(slam.Map().Get(id).points);
@@ -429,9 +429,11 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
     stage("map.svg", io::RenderSvg(drawing));
     stage("map.png", io::RenderPng(drawing));
   }
-  StageGridOutputs(slam, grids, stage);
+  // Every keyframe's scan at its final pose, copied once for the grids and loops.csv.
+  const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
+  StageGridOutputs(slam, keyframes, grids, stage);
   stage("scan_times.csv", FormatScanTimes(out));
-  stage("loops.csv", FormatLoops(slam));
+  stage("loops.csv", FormatLoops(slam, keyframes));
   stage("stats.json", stats_json);
   files.Commit();
   return names;
