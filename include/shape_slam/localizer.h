@@ -5,7 +5,10 @@
 //   ambiguous  two or more distinct hypotheses explain the scans about equally well: each is
 //              tracked (propagated by the scan-to-scan motion) until one wins
 //   tracking   one pose, tracked like the mapper's per-scan localization (§4.2-§5.1) against
-//              the visible shape of the map from the prediction (§3)
+//              the visible shape of the map from the prediction (§3) and, as the mapper's
+//              last keyframe, the last matched scan a keyframe's distance back: where the map
+//              is thin or holds clutter the scan does not see, that fresh view keeps the pose
+//              from sliding, and its matches keep a right pose from being declared lost
 //   lost       tracking failed (several scans without a trusted match, or a sudden drop of
 //              the fit: the kidnapped robot); the global search runs again until it recovers.
 //              The pose tracked until then stays a hypothesis, with the evidence it gathered:
@@ -130,6 +133,12 @@ class Localizer {
     int misses = 0;             // consecutive scans without a trusted match
     bool tracked = false;  // the pose tracked until a loss: accepted again at min_inlier_ratio
   };
+  // The last matched scan while tracking, a keyframe as in the mapper (use_last_keyframe,
+  // keyframe.min_*): its polylines join the map in the model of the next scans.
+  struct RecentScan {
+    ScanShapes shapes;    // sensor frame
+    Pose2 T_map_sensor;
+  };
   struct Verified {
     Pose2 T_map_robot;
     double fit = 0.0;
@@ -138,7 +147,8 @@ class Localizer {
   };
   Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
                  const std::optional<Pose2>& odometry_delta, int lost_scans,
-                 double min_fit) const;
+                 double min_fit, const RecentScan* recent = nullptr) const;
+  void KeepRecent(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot);
   double TrackingMinFit() const;
   std::vector<Pose2> GlobalCandidates(const ScanShapes& shapes, const LaserScan& scan) const;
   void PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
@@ -157,6 +167,7 @@ class Localizer {
   std::vector<Polyline> walls_;  // every map polyline, map frame
   WindowSearch global_search_;  // the map's likelihood field and pyramid, built once
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
+  std::optional<RecentScan> recent_;    // tracking only
   LocalizerStatus status_ = LocalizerStatus::kSearching;
   bool was_localized_ = false;
   int drop_scans_ = 0;   // tracking: consecutive scans with a dropped fit

@@ -125,6 +125,7 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   hypotheses_ = {Hypothesis(T_map_robot, 1.0, 0.0, params_.stages.motion_model)};
+  recent_.reset();
   status_ = LocalizerStatus::kTracking;
   was_localized_ = true;
   drop_scans_ = 0;
@@ -149,7 +150,8 @@ std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan) {
 Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& scan,
                                      const Hypothesis& hypothesis,
                                      const std::optional<Pose2>& odometry_delta,
-                                     int lost_scans, double min_fit) const {
+                                     int lost_scans, double min_fit,
+                                     const RecentScan* recent) const {
   const ShapeSlamParams& p = params_.stages;
   Pose2 T_map_robot_pred = hypothesis.T_map_robot;
   std::optional<Pose2> velocity_hint;
@@ -162,17 +164,24 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   Verified verified;
   verified.T_map_robot = T_map_robot_pred;
   if (shapes.coarse.empty()) return verified;
-  const internal::LocalModel model =
-      VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p);
+  internal::LocalModel model = VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p);
+  if (recent != nullptr && p.use_last_keyframe) {
+    const Pose2 T_pred_recent = T_map_sensor_pred.Inverse() * recent->T_map_sensor;
+    for (const Polyline& c : recent->shapes.coarse) {
+      model.recent_coarse.push_back(Transform(T_pred_recent, c));
+    }
+    for (const Polyline& f : recent->shapes.fine) {
+      model.recent_fine.push_back(Transform(T_pred_recent, f));
+    }
+  }
   const internal::Localization loc =
       internal::Localize(shapes, model, odometry_delta, velocity_hint, lost_scans, p);
   verified.T_map_robot = T_map_sensor_pred * loc.correction * scan.T_robot_sensor.Inverse();
+  const std::vector<Point2> samples =
+      internal::AlignmentSamples(shapes.fine, p.matcher.alignment.sample_spacing_m);
   verified.fit = loc.trusted ? loc.inlier_ratio : 0.0;
   verified.trusted = loc.trusted && loc.inlier_ratio >= min_fit;
-  verified.explained =
-      verified.fit *
-      static_cast<double>(
-          internal::AlignmentSamples(shapes.fine, p.matcher.alignment.sample_spacing_m).size());
+  verified.explained = verified.fit * static_cast<double>(samples.size());
   return verified;
 }
 
@@ -289,7 +298,8 @@ double Localizer::TrackingMinFit() const {
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                                      const std::optional<Pose2>& odometry_delta) {
   Hypothesis& h = hypotheses_.front();
-  const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit());
+  const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(),
+                           recent_ ? &*recent_ : nullptr);
   Motion(h, v.T_map_robot, v.trusted);
   h.fit = v.fit;
   h.evidence = params_.evidence_decay * h.evidence + v.explained;
@@ -308,13 +318,31 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   }
   if (h.misses >= params_.lost_after_scans || drop_scans_ >= params_.fit_drop_scans) {
     h.tracked = true;  // kept: see "lost" in localizer.h
+    recent_.reset();
     report.status = status_ = LocalizerStatus::kLost;
     report.lost_event = true;
     return report;
   }
+  if (v.trusted && !dropped) KeepRecent(shapes, scan, v.T_map_robot);
   report.status = LocalizerStatus::kTracking;
   report.localized = true;
   return report;
+}
+
+// A matched scan becomes the recent scan when there is none or the robot moved a keyframe's
+// distance or turn (KeyframeParams) since the recent one, as the mapper's last keyframe does.
+void Localizer::KeepRecent(const ScanShapes& shapes, const LaserScan& scan,
+                           const Pose2& T_map_robot) {
+  const Pose2 T_map_sensor = T_map_robot * scan.T_robot_sensor;
+  if (recent_) {
+    const Pose2 moved = recent_->T_map_sensor.Inverse() * T_map_sensor;
+    const KeyframeParams& keyframe = params_.stages.keyframe;
+    if (moved.Translation().norm() < keyframe.min_translation_m &&
+        std::abs(moved.theta) < keyframe.min_rotation_rad) {
+      return;
+    }
+  }
+  recent_ = RecentScan{shapes, T_map_sensor};
 }
 
 LocalizerReport Localizer::Process(const LaserScan& input_scan) {
