@@ -83,6 +83,14 @@ struct LocalizerParams {
   double fit_drop_ratio = 0.6;
   int fit_drop_scans = 2;
   double fit_mean_weight = 0.2;
+  /// While tracking with odometry, a scan that finds no match against the visible map is
+  /// matched again with the visibility's occlusion tolerance widened to this (metres; at most
+  /// the mapper's depth_tolerance_m: off). A map holds what no scan sees: a polyline crossing
+  /// the corridor from a wrong closure or a person, which hides the real walls behind it from
+  /// the predicted pose (infinite-corridor: 5 visible polylines explaining nothing of a scan
+  /// that the whole map explains to 99 %). Without odometry the wider model, all around the
+  /// robot, lets wrong poses fit as well, so the retry is left out there.
+  double retry_depth_tolerance_m = 0.5;
 
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;
@@ -147,7 +155,8 @@ class Localizer {
   };
   Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
                  const std::optional<Pose2>& odometry_delta, int lost_scans,
-                 double min_fit, const RecentScan* recent = nullptr) const;
+                 double min_fit, const RecentScan* recent = nullptr,
+                 double depth_tolerance_m = 0.0) const;
   void KeepRecent(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot);
   double TrackingMinFit() const;
   std::vector<Pose2> GlobalCandidates(const ScanShapes& shapes, const LaserScan& scan) const;

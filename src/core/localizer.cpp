@@ -69,8 +69,9 @@ WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
 // internal::ModelVisibility). No keyframe: the map is finished and alone is the reference.
 internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
                                   const Pose2& T_map_sensor, bool all_around,
-                                  const ShapeSlamParams& p) {
-  const VisibilityParams visibility = internal::ModelVisibility(scan, all_around, p);
+                                  const ShapeSlamParams& p, double depth_tolerance_m) {
+  VisibilityParams visibility = internal::ModelVisibility(scan, all_around, p);
+  visibility.depth_tolerance_m = std::max(visibility.depth_tolerance_m, depth_tolerance_m);
   internal::LocalModel model;
   for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility)) {
     model.map.push_back(v.points_sensor);
@@ -105,6 +106,7 @@ void LocalizerParams::Validate() const {
   InRange(fit_drop_ratio, 0.0, 1.0, "LocalizerParams::fit_drop_ratio");
   AtLeastOne(fit_drop_scans, "LocalizerParams::fit_drop_scans");
   InRange(fit_mean_weight, 1e-6, 1.0, "LocalizerParams::fit_mean_weight");
+  InRange(retry_depth_tolerance_m, 0.0, 100.0, "LocalizerParams::retry_depth_tolerance_m");
 }
 
 const char* ToString(LocalizerStatus status) {
@@ -151,7 +153,7 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
                                      const Hypothesis& hypothesis,
                                      const std::optional<Pose2>& odometry_delta,
                                      int lost_scans, double min_fit,
-                                     const RecentScan* recent) const {
+                                     const RecentScan* recent, double depth_tolerance_m) const {
   const ShapeSlamParams& p = params_.stages;
   Pose2 T_map_robot_pred = hypothesis.T_map_robot;
   std::optional<Pose2> velocity_hint;
@@ -164,7 +166,8 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   Verified verified;
   verified.T_map_robot = T_map_robot_pred;
   if (shapes.coarse.empty()) return verified;
-  internal::LocalModel model = VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p);
+  internal::LocalModel model =
+      VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p, depth_tolerance_m);
   if (recent != nullptr && p.use_last_keyframe) {
     const Pose2 T_pred_recent = T_map_sensor_pred.Inverse() * recent->T_map_sensor;
     for (const Polyline& c : recent->shapes.coarse) {
@@ -298,8 +301,14 @@ double Localizer::TrackingMinFit() const {
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                                      const std::optional<Pose2>& odometry_delta) {
   Hypothesis& h = hypotheses_.front();
-  const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(),
-                           recent_ ? &*recent_ : nullptr);
+  Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(),
+                     recent_ ? &*recent_ : nullptr);
+  if (!v.trusted && odometry_delta &&
+      params_.retry_depth_tolerance_m > params_.stages.visibility.depth_tolerance_m) {
+    const Verified wider = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(),
+                                 recent_ ? &*recent_ : nullptr, params_.retry_depth_tolerance_m);
+    if (wider.trusted) v = wider;
+  }
   Motion(h, v.T_map_robot, v.trusted);
   h.fit = v.fit;
   h.evidence = params_.evidence_decay * h.evidence + v.explained;

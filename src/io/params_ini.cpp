@@ -239,6 +239,7 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "fit_drop_ratio", "lost when the fit stays below this times its running mean ...", &p.fit_drop_ratio},
       {"localizer", "fit_drop_scans", "... for this many consecutive scans ...", &p.fit_drop_scans},
       {"localizer", "fit_mean_weight", "... the running mean weighting each scan by this", &p.fit_mean_weight},
+      {"localizer", "retry_depth_tolerance_m", "while tracking with odometry, a scan without a match is matched again with the visibility's occlusion tolerance widened to this (m; 0: off)", &p.retry_depth_tolerance_m},
   };
 }
 

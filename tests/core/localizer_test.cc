@@ -231,6 +231,39 @@ TEST(LocalizerTest, TheLastMatchedScanCarriesTrackingWhereTheMapHoldsTooLittle) 
   }
 }
 
+TEST(LocalizerTest, AWallInFrontOfTheRealOneDoesNotHideItWhileTracking) {
+  // The map holds a copy of the south wall 0.15 m in front of it (as a wrong closure leaves
+  // one), which from the robot hides the real wall its scans see (beyond the matcher's 0.1 m
+  // inlier distance): at a strict min_inlier_ratio the robot is lost. Tracking with odometry, a
+  // scan without a match is matched again with the occlusion tolerance widened
+  // (retry_depth_tolerance_m): the real wall is then in the model too and the pose holds.
+  const SimRun run = Simulate(0, 60, 9);
+  testing::Scene world = testing::LoopWorld();
+  world.push_back({{2.0, 0.15}, {12.0, 0.15}});
+  for (const double retry : {0.5, 0.0}) {
+    LocalizerParams params;
+    params.min_inlier_ratio = 0.9;
+    params.relative_inlier_ratio = 0.0;
+    params.retry_depth_tolerance_m = retry;
+    Localizer localizer(SceneMap(world), params);
+    localizer.SetInitialPose(run.truth[0]);
+    int lost = 0;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      lost += report.lost_event ? 1 : 0;
+      if (retry > 0.0) {
+        EXPECT_TRUE(report.localized) << "scan " << i;
+        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
+      }
+    }
+    if (retry > 0.0) {
+      EXPECT_EQ(lost, 0);
+    } else {
+      EXPECT_GT(lost, 0);
+    }
+  }
+}
+
 TEST(LocalizerTest, IsDeterministic) {
   const SimRun run = Simulate(1, 15, 5);
   Localizer a(SceneMap(testing::LoopWorld())), b(SceneMap(testing::LoopWorld()));
