@@ -68,6 +68,24 @@ SimRun Simulate(int start_corner, int num_scans, unsigned seed) {
   return run;
 }
 
+// Tracks `run` in `map` from its first true pose and returns the lost events. With
+// `expect_right`, every scan must be localized within 0.1 m and 0.05 rad of the truth.
+int TrackFromTheStart(const PolylineMap& map, const LocalizerParams& params, const SimRun& run,
+                      bool expect_right) {
+  Localizer localizer(map, params);
+  localizer.SetInitialPose(run.truth[0]);
+  int lost = 0;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    const LocalizerReport report = localizer.Process(run.scans[i]);
+    lost += report.lost_event ? 1 : 0;
+    if (expect_right) {
+      EXPECT_TRUE(report.localized) << "scan " << i;
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
+    }
+  }
+  return lost;
+}
+
 TEST(LocalizerTest, TracksFromAGivenInitialPose) {
   const SimRun run = Simulate(0, 80, 1);
   Localizer localizer(SceneMap(testing::LoopWorld()));
@@ -180,17 +198,7 @@ TEST(LocalizerTest, ARightPoseStaysLocalizedWhereTheFixedFitThresholdIsTooStrict
     LocalizerParams params;
     params.min_inlier_ratio = 0.999;
     params.relative_inlier_ratio = relative;
-    Localizer localizer(SceneMap(testing::LoopWorld()), params);
-    localizer.SetInitialPose(run.truth[0]);
-    int lost = 0;
-    for (std::size_t i = 0; i < run.scans.size(); ++i) {
-      const LocalizerReport report = localizer.Process(run.scans[i]);
-      lost += report.lost_event ? 1 : 0;
-      if (relative > 0.0) {
-        EXPECT_TRUE(report.localized) << "scan " << i;
-        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
-      }
-    }
+    const int lost = TrackFromTheStart(SceneMap(testing::LoopWorld()), params, run, relative > 0.0);
     if (relative > 0.0) {
       EXPECT_EQ(lost, 0);
     } else {
@@ -212,17 +220,7 @@ TEST(LocalizerTest, TheLastMatchedScanCarriesTrackingWhereTheMapHoldsTooLittle) 
     params.min_inlier_ratio = 0.6;
     params.relative_inlier_ratio = 0.0;
     params.stages.use_last_keyframe = recent;
-    Localizer localizer(SceneMap(outer), params);
-    localizer.SetInitialPose(run.truth[0]);
-    int lost = 0;
-    for (std::size_t i = 0; i < run.scans.size(); ++i) {
-      const LocalizerReport report = localizer.Process(run.scans[i]);
-      lost += report.lost_event ? 1 : 0;
-      if (recent) {
-        EXPECT_TRUE(report.localized) << "scan " << i;
-        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
-      }
-    }
+    const int lost = TrackFromTheStart(SceneMap(outer), params, run, recent);
     if (recent) {
       EXPECT_EQ(lost, 0);
     } else {
@@ -245,17 +243,7 @@ TEST(LocalizerTest, AWallInFrontOfTheRealOneDoesNotHideItWhileTracking) {
     params.min_inlier_ratio = 0.9;
     params.relative_inlier_ratio = 0.0;
     params.retry_depth_tolerance_m = retry;
-    Localizer localizer(SceneMap(world), params);
-    localizer.SetInitialPose(run.truth[0]);
-    int lost = 0;
-    for (std::size_t i = 0; i < run.scans.size(); ++i) {
-      const LocalizerReport report = localizer.Process(run.scans[i]);
-      lost += report.lost_event ? 1 : 0;
-      if (retry > 0.0) {
-        EXPECT_TRUE(report.localized) << "scan " << i;
-        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
-      }
-    }
+    const int lost = TrackFromTheStart(SceneMap(world), params, run, retry > 0.0);
     if (retry > 0.0) {
       EXPECT_EQ(lost, 0);
     } else {
