@@ -49,8 +49,9 @@ class PolylineMap {
   std::vector<PolylineId> IdsNear(const Point2& min, const Point2& max) const;
 
   /// The visible map shape from a sensor pose (§3, §4): CCW ordered visible parts, sensor frame.
-  std::vector<VisiblePolyline> Visible(const Pose2& T_map_sensor,
-                                       const VisibilityParams& params) const;
+  /// With `seen`, the parts the scan saw through are left out (SeenRays, visibility.h).
+  std::vector<VisiblePolyline> Visible(const Pose2& T_map_sensor, const VisibilityParams& params,
+                                       const SeenRays* seen = nullptr) const;
 
   /// The polylines with their ids, increasing: all that Restore needs (a third of the memory of
   /// a copy of the map, which also holds the index).

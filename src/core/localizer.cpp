@@ -69,11 +69,12 @@ WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
 // internal::ModelVisibility). No keyframe: the map is finished and alone is the reference.
 internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
                                   const Pose2& T_map_sensor, bool all_around,
-                                  const ShapeSlamParams& p, double depth_tolerance_m) {
+                                  const ShapeSlamParams& p, double depth_tolerance_m,
+                                  const SeenRays* seen) {
   VisibilityParams visibility = internal::ModelVisibility(scan, all_around, p);
   visibility.depth_tolerance_m = std::max(visibility.depth_tolerance_m, depth_tolerance_m);
   internal::LocalModel model;
-  for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility)) {
+  for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility, seen)) {
     model.map.push_back(v.points_sensor);
   }
   model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
@@ -107,6 +108,7 @@ void LocalizerParams::Validate() const {
   AtLeastOne(fit_drop_scans, "LocalizerParams::fit_drop_scans");
   InRange(fit_mean_weight, 1e-6, 1.0, "LocalizerParams::fit_mean_weight");
   InRange(retry_depth_tolerance_m, 0.0, 100.0, "LocalizerParams::retry_depth_tolerance_m");
+  InRange(see_through_margin_m, 0.0, 100.0, "LocalizerParams::see_through_margin_m");
 }
 
 const char* ToString(LocalizerStatus status) {
@@ -153,7 +155,7 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
                                      const Hypothesis& hypothesis,
                                      const std::optional<Pose2>& odometry_delta,
                                      int lost_scans, double min_fit,
-                                     const RecentScan* recent, double depth_tolerance_m) const {
+                                     const TrackingAids& aids) const {
   const ShapeSlamParams& p = params_.stages;
   Pose2 T_map_robot_pred = hypothesis.T_map_robot;
   std::optional<Pose2> velocity_hint;
@@ -166,14 +168,16 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   Verified verified;
   verified.T_map_robot = T_map_robot_pred;
   if (shapes.coarse.empty()) return verified;
-  internal::LocalModel model =
-      VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p, depth_tolerance_m);
-  if (recent != nullptr && p.use_last_keyframe) {
-    const Pose2 T_pred_recent = T_map_sensor_pred.Inverse() * recent->T_map_sensor;
-    for (const Polyline& c : recent->shapes.coarse) {
+  std::optional<SeenRays> seen;
+  if (aids.see_through) seen = SeenRaysOf(scan, params_.see_through_margin_m);
+  internal::LocalModel model = VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p,
+                                            aids.depth_tolerance_m, seen ? &*seen : nullptr);
+  if (aids.recent != nullptr && p.use_last_keyframe) {
+    const Pose2 T_pred_recent = T_map_sensor_pred.Inverse() * aids.recent->T_map_sensor;
+    for (const Polyline& c : aids.recent->shapes.coarse) {
       model.recent_coarse.push_back(Transform(T_pred_recent, c));
     }
-    for (const Polyline& f : recent->shapes.fine) {
+    for (const Polyline& f : aids.recent->shapes.fine) {
       model.recent_fine.push_back(Transform(T_pred_recent, f));
     }
   }
@@ -216,7 +220,8 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
                                     const std::optional<Pose2>& odometry_delta) {
   std::vector<Hypothesis> kept;
   for (Hypothesis& h : hypotheses_) {
-    const Verified v = Track(shapes, scan, h, odometry_delta, h.misses, params_.min_inlier_ratio);
+    const Verified v =
+        Track(shapes, scan, h, odometry_delta, h.misses, params_.min_inlier_ratio, TrackingAids{});
     Motion(h, v.T_map_robot, v.trusted);
     h.fit = v.fit;
     h.evidence = params_.evidence_decay * h.evidence + v.explained;
@@ -231,7 +236,8 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
 void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan) {
   for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
     const Hypothesis probe(candidate, 0.0, 0.0, params_.stages.motion_model);
-    const Verified v = Track(shapes, scan, probe, Pose2(), 0, params_.min_inlier_ratio);
+    const Verified v =
+        Track(shapes, scan, probe, Pose2(), 0, params_.min_inlier_ratio, TrackingAids{});
     if (!v.trusted) continue;
     const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
       return Near(h.T_map_robot, v.T_map_robot, params_);
@@ -301,12 +307,14 @@ double Localizer::TrackingMinFit() const {
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                                      const std::optional<Pose2>& odometry_delta) {
   Hypothesis& h = hypotheses_.front();
-  Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(),
-                     recent_ ? &*recent_ : nullptr);
+  TrackingAids aids;
+  aids.recent = recent_ ? &*recent_ : nullptr;
+  aids.see_through = odometry_delta && params_.see_through_margin_m > 0.0;
+  Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
   if (!v.trusted && odometry_delta &&
       params_.retry_depth_tolerance_m > params_.stages.visibility.depth_tolerance_m) {
-    const Verified wider = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(),
-                                 recent_ ? &*recent_ : nullptr, params_.retry_depth_tolerance_m);
+    aids.depth_tolerance_m = params_.retry_depth_tolerance_m;
+    const Verified wider = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
     if (wider.trusted) v = wider;
   }
   Motion(h, v.T_map_robot, v.trusted);

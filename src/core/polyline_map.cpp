@@ -100,8 +100,9 @@ std::vector<PolylineId> PolylineMap::IdsNear(const Point2& min, const Point2& ma
 }
 
 std::vector<VisiblePolyline> PolylineMap::Visible(const Pose2& T_map_sensor,
-                                                  const VisibilityParams& params) const {
-  return ComputeVisibleShape(geometry_, index_, T_map_sensor, params);
+                                                  const VisibilityParams& params,
+                                                  const SeenRays* seen) const {
+  return ComputeVisibleShape(geometry_, index_, T_map_sensor, params, seen);
 }
 
 std::size_t PolylineMap::GeometryBytes() const {

@@ -183,6 +183,35 @@ struct SegmentBinParts {
   std::vector<std::size_t> begin;
 };
 
+// The range the scan saw along the centre ray of a bin: the nearest beam's, if one lies within
+// a beam step of it (NaN otherwise, and for a beam without a reading).
+double SeenRange(const Sweep& sweep, int bin, const SeenRays& seen) {
+  const std::vector<double>& b = seen.bearings_rad;
+  if (b.size() < 2) return std::numeric_limits<double>::quiet_NaN();
+  const double phi = NormalizeAngle(sweep.Edge(bin) + 0.5 * sweep.width);
+  const auto it = std::lower_bound(b.begin(), b.end(), phi);
+  std::size_t i = static_cast<std::size_t>(it - b.begin());
+  if (i == b.size() || (i > 0 && phi - b[i - 1] < b[i] - phi)) --i;
+  const double step = (b.back() - b.front()) / static_cast<double>(b.size() - 1);
+  if (std::abs(NormalizeAngle(b[i] - phi)) > step) return std::numeric_limits<double>::quiet_NaN();
+  return seen.ranges_m[i];
+}
+
+// Parts nearer than the scan's beam of their bin by more than the margin are emptied: the beam
+// went past them (SeenRays).
+void DropSeenThrough(const Sweep& sweep, const std::vector<SweptSegment>& segments,
+                     const SeenRays& seen, SegmentBinParts& bin_parts) {
+  std::vector<double> range(sweep.bins);
+  for (int k = 0; k < sweep.bins; ++k) range[k] = SeenRange(sweep, k, seen);
+  for (std::size_t i = 0; i < segments.size(); ++i) {
+    BinPart* parts = bin_parts.parts.data() + bin_parts.begin[i];
+    for (int j = 0; j < segments[i].num_bins; ++j) {
+      const double r = range[(segments[i].first_bin + j) % sweep.bins];
+      if (!parts[j].Empty() && parts[j].depth < r - seen.margin_m) parts[j] = BinPart{};
+    }
+  }
+}
+
 SegmentBinParts BinPartsOf(const Sweep& sweep, const std::vector<SweptSegment>& segments) {
   SegmentBinParts out;
   out.begin.reserve(segments.size() + 1);
@@ -307,12 +336,13 @@ void VisibilityParams::Validate() const {
 
 std::vector<VisiblePolyline> ComputeVisibleShape(
     const std::unordered_map<PolylineId, Polyline>& polylines_map, const SegmentIndex& index,
-    const Pose2& T_map_sensor, const VisibilityParams& params) {
+    const Pose2& T_map_sensor, const VisibilityParams& params, const SeenRays* seen) {
   params.Validate();
   const Sweep& sweep = MakeSweep(params);
   const std::vector<SweptSegment> segments =
       GatherSegments(polylines_map, index, T_map_sensor, params, sweep);
-  const SegmentBinParts bin_parts = BinPartsOf(sweep, segments);
+  SegmentBinParts bin_parts = BinPartsOf(sweep, segments);
+  if (seen != nullptr) DropSeenThrough(sweep, segments, *seen, bin_parts);
   const std::vector<double> zbuffer = BuildZBuffer(sweep, segments, bin_parts);
   std::vector<VisiblePolyline> out;
   PieceBuilder builder(params, out);
@@ -346,6 +376,18 @@ std::vector<VisiblePolyline> ComputeVisibleShape(
   sorted.reserve(out.size());
   for (const auto& [bearing, i] : order) sorted.push_back(std::move(out[i]));
   return sorted;
+}
+
+SeenRays SeenRaysOf(const LaserScan& scan, double margin_m) {
+  SeenRays seen;
+  seen.margin_m = margin_m;
+  seen.bearings_rad = scan.angles_rad;
+  seen.ranges_m.reserve(scan.ranges_m.size());
+  for (const double r : scan.ranges_m) {
+    const bool reading = std::isfinite(r) && r > 0.0 && r < scan.max_range_m;
+    seen.ranges_m.push_back(reading ? r : std::numeric_limits<double>::quiet_NaN());
+  }
+  return seen;
 }
 
 VisibilityParams VisibilityForScan(const LaserScan& scan, const VisibilityParams& base,

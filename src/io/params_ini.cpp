@@ -240,6 +240,7 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "fit_drop_scans", "... for this many consecutive scans ...", &p.fit_drop_scans},
       {"localizer", "fit_mean_weight", "... the running mean weighting each scan by this", &p.fit_mean_weight},
       {"localizer", "retry_depth_tolerance_m", "while tracking with odometry, a scan without a match is matched again with the visibility's occlusion tolerance widened to this (m; 0: off)", &p.retry_depth_tolerance_m},
+      {"localizer", "see_through_margin_m", "while tracking with odometry, map parts nearer than the scan's beam of the same bearing by more than this are left out: the beam went past them (m; 0: off)", &p.see_through_margin_m},
   };
 }
 

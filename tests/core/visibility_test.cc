@@ -17,8 +17,9 @@ struct MapFixture {
     polylines[id] = p;
     index.Insert(id, p);
   }
-  std::vector<VisiblePolyline> See(const Pose2& T, VisibilityParams params = {}) const {
-    return ComputeVisibleShape(polylines, index, T, params);
+  std::vector<VisiblePolyline> See(const Pose2& T, VisibilityParams params = {},
+                                   const SeenRays* seen = nullptr) const {
+    return ComputeVisibleShape(polylines, index, T, params, seen);
   }
 };
 
@@ -45,6 +46,39 @@ TEST(VisibilityTest, WallBehindAWallIsCutAtTheShadowRays) {
   for (const VisiblePolyline& p : v) {  // counter-clockwise along each piece
     EXPECT_LT(Bearing(p.points_sensor.front()), Bearing(p.points_sensor.back()));
   }
+}
+
+TEST(VisibilityTest, AWallTheScanSawThroughNeitherHidesNorIsSeen) {
+  // The map's near wall (x = 2, |y| <= 1) is gone: the scan's beams reach the far wall (x = 4)
+  // through it. With the scan's rays the near wall is left out and the far wall is whole; where
+  // a beam has no reading (NaN) the map decides as without rays.
+  MapFixture map;
+  map.Add(0, {{2, -1}, {2, 1}});
+  map.Add(1, {{4, -4}, {4, 4}});
+  LaserScan scan;
+  scan.max_range_m = 30.0;
+  for (int i = 0; i <= 180; ++i) {
+    const double a = -M_PI / 2 + i * M_PI / 180;
+    scan.angles_rad.push_back(a);
+    scan.ranges_m.push_back(std::abs(std::cos(a)) > 1e-6 ? 4.0 / std::cos(a) : 30.0);
+  }
+  SeenRays seen = SeenRaysOf(scan, 0.5);
+  std::vector<VisiblePolyline> v = map.See(Pose2(), {}, &seen);
+  ASSERT_EQ(v.size(), 1u);
+  EXPECT_EQ(v[0].source, 1u);
+  EXPECT_NEAR(v[0].source_from_m, 0.0, 1e-9);
+  EXPECT_NEAR(v[0].source_to_m, 8.0, 1e-9);
+  // A margin wider than the 2 m between the walls keeps the near wall, which hides the far.
+  seen = SeenRaysOf(scan, 2.5);
+  EXPECT_EQ(map.See(Pose2(), {}, &seen).size(), 3u);
+  // No readings: the near wall hides the far one as before.
+  std::fill(scan.ranges_m.begin(), scan.ranges_m.end(), std::nan(""));
+  seen = SeenRaysOf(scan, 0.5);
+  EXPECT_EQ(map.See(Pose2(), {}, &seen).size(), 3u);
+  // "No return" is no reading either (glass, a dark surface).
+  std::fill(scan.ranges_m.begin(), scan.ranges_m.end(), 30.0);
+  seen = SeenRaysOf(scan, 0.5);
+  EXPECT_EQ(map.See(Pose2(), {}, &seen).size(), 3u);
 }
 
 TEST(VisibilityTest, ClipsAtTheRangeCircleAndTheFieldOfView) {
