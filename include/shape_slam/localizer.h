@@ -8,7 +8,10 @@
 //              the visible shape of the map from the prediction (§3) and, as the mapper's
 //              last keyframe, the last matched scan a keyframe's distance back: where the map
 //              is thin or holds clutter the scan does not see, that fresh view keeps the pose
-//              from sliding, and its matches keep a right pose from being declared lost
+//              from sliding, and its matches keep a right pose from being declared lost. With
+//              odometry, map parts the scan saw through (people, the walls of a wrong loop
+//              closure) are left out of the visible map, and a scan without a match is tried
+//              again with a wider occlusion tolerance
 //   lost       tracking failed (several scans without a trusted match, or a sudden drop of
 //              the fit: the kidnapped robot); the global search runs again until it recovers.
 //              The pose tracked until then stays a hypothesis, with the evidence it gathered:

@@ -66,7 +66,9 @@ WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
 
 // What a scan is matched against from a sensor pose: the visible map shape (§3), around the
 // scan's field of view, or all around and a motion farther when the pose is only a guess (§4.3;
-// internal::ModelVisibility). No keyframe: the map is finished and alone is the reference.
+// internal::ModelVisibility); with `seen`, without what the scan saw through, and with the
+// occlusion tolerance at least depth_tolerance_m. The tracked pose's recent scan is added by
+// Track.
 internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
                                   const Pose2& T_map_sensor, bool all_around,
                                   const ShapeSlamParams& p, double depth_tolerance_m,
