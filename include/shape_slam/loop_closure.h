@@ -150,6 +150,12 @@ struct LoopClosureParams {
   /// standard deviations (a weak constraint), metres and radians.
   double unconfirmed_sigma_m = 0.3;
   double unconfirmed_sigma_rad = 0.1;
+  /// With submaps and without odometry, a keyframe's edge to the previous one is widened along
+  /// a ridge of fits (internal::WidenedAlongRidge): shifts of up to this much (metres; 0: off)
+  /// along the direction it constrains least are tried ...
+  double ridge_max_shift_m = 1.0;
+  /// ... and count as fitting as well when the fit drops by at most this much.
+  double ridge_fit_margin = 0.05;
   /// A loop edge that disagrees with the graph by more than this triggers optimisation.
   double min_correction_m = 0.05;
   double min_correction_rad = 0.01;

@@ -171,6 +171,8 @@ void LoopClosureParams::Validate() const {
   NonNegative(candidate_spacing_m, "LoopClosureParams::candidate_spacing_m");
   Positive(unconfirmed_sigma_m, "LoopClosureParams::unconfirmed_sigma_m");
   Positive(unconfirmed_sigma_rad, "LoopClosureParams::unconfirmed_sigma_rad");
+  NonNegative(ridge_max_shift_m, "LoopClosureParams::ridge_max_shift_m");
+  Fraction(ridge_fit_margin, "LoopClosureParams::ridge_fit_margin");
   Positive(max_correction_m, "LoopClosureParams::max_correction_m");
   NonNegative(max_correction_per_m, "LoopClosureParams::max_correction_per_m");
   Fraction(min_inlier_ratio, "LoopClosureParams::min_inlier_ratio");

@@ -194,6 +194,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "candidate_spacing_m", "candidates tried are at least this much driving apart (m)", &p.loop_closure.candidate_spacing_m},
       {"loop_closure", "unconfirmed_sigma_m", "edge of an unconfirmed keyframe: position standard deviation (m)", &p.loop_closure.unconfirmed_sigma_m},
       {"loop_closure", "unconfirmed_sigma_rad", "... heading standard deviation (rad)", &p.loop_closure.unconfirmed_sigma_rad},
+      {"loop_closure", "ridge_max_shift_m", "with submaps and without odometry, a keyframe's edge is widened along a ridge of fits (a featureless corridor): shifts up to this (m; 0: off) along its weakest direction are tried ...", &p.loop_closure.ridge_max_shift_m},
+      {"loop_closure", "ridge_fit_margin", "... and fit as well when the fit drops by at most this", &p.loop_closure.ridge_fit_margin},
       {"loop_closure", "confirm_tolerance_rad", "... and within this (rad) ...", &p.loop_closure.confirm_tolerance_rad},
       {"loop_closure", "confirm_tolerance_rad_per_m", "... plus this per metre of its graph chains (rad/m)", &p.loop_closure.confirm_tolerance_rad_per_m},
       {"loop_closure", "loss_scale", "Cauchy loss scale of loop edges, in standard deviations", &p.loop_closure.graph.loop_loss_scale},
