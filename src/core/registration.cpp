@@ -55,7 +55,9 @@ Eigen::Matrix3d WidenedAlongRidge(const std::vector<Point2>& samples,
       Pose2 shifted = T_model_scan;
       shifted.x += sign * shift * weakest.x();
       shifted.y += sign * shift * weakest.y();
-      if (check.KnownInlierRatio(samples, shifted) >= fit - fit_margin) extent = std::max(extent, shift);
+      if (check.KnownInlierRatio(samples, shifted) >= fit - fit_margin) {
+        extent = std::max(extent, shift);
+      }
     }
   }
   Eigen::Matrix3d widened = covariance;

@@ -193,7 +193,8 @@ TEST(RegistrationTest, WidenedAlongRidgeWidensAlongAFeaturelessCorridorOnly) {
   const double inlier_m = 0.1;
   // Along x the refinement reports 1 cm, as it does where the two views overlap better short.
   const Eigen::Matrix3d tight = Eigen::Vector3d(1e-4, 4e-6, 1e-6).asDiagonal();
-  const std::vector<Point2> corridor_samples = internal::AlignmentSamples(CorridorWalls(10, 15), 0.1);
+  const std::vector<Point2> corridor_samples =
+      internal::AlignmentSamples(CorridorWalls(10, 15), 0.1);
   const std::vector<Polyline> corridor_model = CorridorWalls(0, 20);
   const Eigen::Matrix3d widened = internal::WidenedAlongRidge(
       corridor_samples, corridor_model, Pose2(), tight, inlier_m, 1.0, 0.05);
