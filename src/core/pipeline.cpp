@@ -259,21 +259,25 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   const Pose2 estimate = prev.scan.T_robot_sensor.Inverse() * edge.T_from_to * scan.T_robot_sensor;
   const RefinementResult local =
       RefineAlignment(samples, prev_fine, estimate, std::nullopt, params_.refinement);
+  // Along a corridor that the two views cannot place, the step is only as certain as the
+  // prediction: with odometry it held the tracking there; without, the edge is widened, so
+  // that a loop closure corrects a slide without bending the rest of the path. Only with
+  // submaps: in the global design the graph's corrections come back into the tracking through
+  // the rebuilt map, and the softer corridors made its worst copies worse (docs/notebook.md).
+  const LoopClosureParams& lc = params_.loop_closure;
+  const bool widen = UseSubmaps() && odometry_.status != OdometryStatus::kUsed &&
+                     lc.ridge_max_shift_m > 0.0;
+  // One model for the fit check and the ridge (its open ends only prepared when widening).
   const internal::ModelIcp check(prev_fine, params_.matcher.inlier_distance_m,
-                                 params_.matcher.inlier_distance_m);
+                                 params_.matcher.inlier_distance_m,
+                                 widen ? internal::RidgeOpenEndM(lc.ridge_max_shift_m) : 0.0);
   if (local.converged && check.InlierRatio(samples, local.T_map_scan) >= params_.min_inlier_ratio) {
     edge.T_from_to = prev.scan.T_robot_sensor * local.T_map_scan * scan.T_robot_sensor.Inverse();
     edge.covariance = EdgeCovariance(local.covariance, params_.loop_closure);
-    // Along a corridor that the two views cannot place, the step is only as certain as the
-    // prediction: with odometry it held the tracking there; without, the edge is widened, so
-    // that a loop closure corrects a slide without bending the rest of the path. Only with
-    // submaps: in the global design the graph's corrections come back into the tracking through
-    // the rebuilt map, and the softer corridors made its worst copies worse (docs/notebook.md).
-    if (UseSubmaps() && odometry_.status != OdometryStatus::kUsed) {
-      const LoopClosureParams& lc = params_.loop_closure;
-      edge.covariance = internal::WidenedAlongRidge(
-          samples, prev_fine, local.T_map_scan, edge.covariance, params_.matcher.inlier_distance_m,
-          lc.ridge_max_shift_m, lc.ridge_fit_margin);
+    if (widen) {
+      edge.covariance = internal::WidenedAlongRidge(samples, check, local.T_map_scan,
+                                                    edge.covariance, lc.ridge_max_shift_m,
+                                                    lc.ridge_fit_margin);
     }
   }
   return edge;

@@ -5,7 +5,6 @@
 #include <cmath>
 
 #include "shape_slam/alignment.h"
-#include "shape_slam/internal/model_icp.h"
 
 namespace shape_slam::internal {
 
@@ -39,23 +38,20 @@ double InlierRatio(const std::vector<Point2>& samples, const internal::SegmentGr
   return samples.empty() ? 0.0 : static_cast<double>(inliers) / samples.size();
 }
 
-Eigen::Matrix3d WidenedAlongRidge(const std::vector<Point2>& samples,
-                                  const std::vector<Polyline>& model, const Pose2& T_model_scan,
-                                  const Eigen::Matrix3d& covariance, double inlier_m,
+Eigen::Matrix3d WidenedAlongRidge(const std::vector<Point2>& samples, const ModelIcp& model,
+                                  const Pose2& T_model_scan, const Eigen::Matrix3d& covariance,
                                   double max_shift_m, double fit_margin) {
-  if (max_shift_m <= 0.0 || samples.empty() || model.empty()) return covariance;
+  if (max_shift_m <= 0.0 || samples.empty()) return covariance;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(covariance.topLeftCorner<2, 2>());
   const Eigen::Vector2d weakest = eig.eigenvectors().col(1);  // eigenvalues ascend
-  // Samples a shift carries past the end of a model wall are unknown space, not misfits.
-  const ModelIcp check(model, inlier_m, inlier_m, 1.5 * max_shift_m);
-  const double fit = check.KnownInlierRatio(samples, T_model_scan);
+  const double fit = model.KnownInlierRatio(samples, T_model_scan);
   double extent = 0.0;
   for (const double shift : {0.5 * max_shift_m, max_shift_m}) {
     for (const double sign : {-1.0, 1.0}) {
       Pose2 shifted = T_model_scan;
       shifted.x += sign * shift * weakest.x();
       shifted.y += sign * shift * weakest.y();
-      if (check.KnownInlierRatio(samples, shifted) >= fit - fit_margin) {
+      if (model.KnownInlierRatio(samples, shifted) >= fit - fit_margin) {
         extent = std::max(extent, shift);
       }
     }

@@ -195,17 +195,20 @@ TEST(RegistrationTest, WidenedAlongRidgeWidensAlongAFeaturelessCorridorOnly) {
   const Eigen::Matrix3d tight = Eigen::Vector3d(1e-4, 4e-6, 1e-6).asDiagonal();
   const std::vector<Point2> corridor_samples =
       internal::AlignmentSamples(CorridorWalls(10, 15), 0.1);
-  const std::vector<Polyline> corridor_model = CorridorWalls(0, 20);
-  const Eigen::Matrix3d widened = internal::WidenedAlongRidge(
-      corridor_samples, corridor_model, Pose2(), tight, inlier_m, 1.0, 0.05);
+  const auto model = [&](const std::vector<Polyline>& walls) {
+    return internal::ModelIcp(walls, inlier_m, inlier_m, internal::RidgeOpenEndM(1.0));
+  };
+  const internal::ModelIcp corridor_model = model(CorridorWalls(0, 20));
+  const Eigen::Matrix3d widened =
+      internal::WidenedAlongRidge(corridor_samples, corridor_model, Pose2(), tight, 1.0, 0.05);
   EXPECT_NEAR(widened(0, 0), 1.0, 1e-9);  // the full shift tried: 1 m
   EXPECT_NEAR(widened(1, 1), tight(1, 1), 1e-12);
   EXPECT_NEAR(widened(2, 2), tight(2, 2), 1e-12);
   EXPECT_NEAR(widened(0, 1), 0.0, 1e-12);
 
   // Off: unchanged.
-  EXPECT_TRUE(internal::WidenedAlongRidge(corridor_samples, corridor_model, Pose2(), tight,
-                                          inlier_m, 0.0, 0.05)
+  EXPECT_TRUE(internal::WidenedAlongRidge(corridor_samples, corridor_model, Pose2(), tight, 0.0,
+                                          0.05)
                   .isApprox(tight));
 
   // The corridor's end wall in view fixes x: shifted, its samples leave the model.
@@ -214,14 +217,14 @@ TEST(RegistrationTest, WidenedAlongRidgeWidensAlongAFeaturelessCorridorOnly) {
   const std::vector<Point2> dead_end_samples = internal::AlignmentSamples(dead_end_walls, 0.1);
   std::vector<Polyline> dead_end_model = CorridorWalls(0, 15);
   dead_end_model.push_back({Point2(15, -1.0), Point2(15, 1.0)});
-  EXPECT_TRUE(internal::WidenedAlongRidge(dead_end_samples, dead_end_model, Pose2(), tight,
-                                          inlier_m, 1.0, 0.05)
+  EXPECT_TRUE(internal::WidenedAlongRidge(dead_end_samples, model(dead_end_model), Pose2(), tight,
+                                          1.0, 0.05)
                   .isApprox(tight));
 
   // Only the weakest direction is tried: across the corridor the walls leave the model at once.
   const Eigen::Matrix3d across = Eigen::Vector3d(4e-6, 1e-4, 1e-6).asDiagonal();
-  EXPECT_TRUE(internal::WidenedAlongRidge(corridor_samples, corridor_model, Pose2(), across,
-                                          inlier_m, 1.0, 0.05)
+  EXPECT_TRUE(internal::WidenedAlongRidge(corridor_samples, corridor_model, Pose2(), across, 1.0,
+                                          0.05)
                   .isApprox(across));
 }
 

@@ -13,6 +13,7 @@
 
 #include "shape_slam/alignment_refinement.h"
 #include "shape_slam/candidate_selection.h"
+#include "shape_slam/internal/model_icp.h"
 #include "shape_slam/internal/model_segments.h"
 #include "shape_slam/types.h"
 
@@ -63,16 +64,21 @@ RefinementResult RefineAgainstMap(const std::vector<Point2>& samples,
                                   const std::optional<PosePrior>& prior,
                                   const RefinementParams& refinement, double coarse_gate_m);
 
+/// How far ModelIcp::KnownInlierRatio must look past a model wall's open end for
+/// WidenedAlongRidge's shifts of up to max_shift_m: samples a shift carries past the end of a
+/// wall are unknown space, not misfits.
+inline double RidgeOpenEndM(double max_shift_m) { return 1.5 * max_shift_m; }
+
 /// A registration's covariance widened along a ridge of fits (not in the paper). Shifted from
 /// T_model_scan along the direction its covariance constrains least, by max_shift_m / 2 or
 /// max_shift_m either way, the scan may still fit the model over known space
-/// (ModelIcp::KnownInlierRatio) within fit_margin of its fit at T_model_scan: along a featureless
-/// stretch of corridor the registration cannot tell those positions apart (and the overlap of the
-/// two views pulls it short). The standard deviation along that direction then becomes at least
-/// the largest such shift. The covariance is returned as it is otherwise, or when max_shift_m is 0.
-Eigen::Matrix3d WidenedAlongRidge(const std::vector<Point2>& samples,
-                                  const std::vector<Polyline>& model, const Pose2& T_model_scan,
-                                  const Eigen::Matrix3d& covariance, double inlier_m,
+/// (model.KnownInlierRatio; `model` built with open_end_m = RidgeOpenEndM(max_shift_m)) within
+/// fit_margin of its fit at T_model_scan: along a featureless stretch of corridor the
+/// registration cannot tell those positions apart (and the overlap of the two views pulls it
+/// short). The standard deviation along that direction then becomes at least the largest such
+/// shift. The covariance is returned as it is otherwise, or when max_shift_m is 0.
+Eigen::Matrix3d WidenedAlongRidge(const std::vector<Point2>& samples, const ModelIcp& model,
+                                  const Pose2& T_model_scan, const Eigen::Matrix3d& covariance,
                                   double max_shift_m, double fit_margin);
 
 /// Fraction of the samples within the grid's radius of the model at an estimate.
