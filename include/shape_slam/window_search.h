@@ -18,6 +18,7 @@
 #pragma once
 
 #include <cstdint>
+#include <array>
 #include <queue>
 #include <vector>
 
@@ -116,6 +117,11 @@ class WindowSearch {
     int n_ = 0, rotations_ = 0, half_rotations_ = 0;
     double step_rad_ = 0.0, cell_penalty_ = 0.0, to_score_ = 0.0;
     std::vector<int> cells_;
+    // Per rotation: the samples' cells as offsets into a level (iy * nx + ix) and their
+    // bounding box (x0, y0, x1, y1): a node whose shifted box lies inside the grid is summed
+    // without the per-cell bounds checks of LevelValue (same sums).
+    std::vector<long> offsets_;
+    std::vector<std::array<int, 4>> boxes_;
     std::vector<double> rotation_penalty_;
   };
   int LevelValue(int level, int ix, int iy) const;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <queue>
 #include <stdexcept>
 #include <string>
@@ -211,6 +212,18 @@ WindowSearch::Scorer::Scorer(const WindowSearch& search, const std::vector<Point
   half_rotations_ = static_cast<int>(std::ceil(std::min(half_window_rad, M_PI) / step_rad_));
   rotations_ = full_turn ? 2 * half_rotations_ : 2 * half_rotations_ + 1;
   cells_ = search.RotatedCells(samples_scan, centre, rotations_, half_rotations_, step_rad_);
+  offsets_.resize(cells_.size() / 2);
+  boxes_.assign(rotations_, {std::numeric_limits<int>::max(), std::numeric_limits<int>::max(),
+                             std::numeric_limits<int>::min(), std::numeric_limits<int>::min()});
+  for (int r = 0; r < rotations_; ++r) {
+    std::array<int, 4>& box = boxes_[r];
+    for (int i = 0; i < n_; ++i) {
+      const std::size_t k = static_cast<std::size_t>(r) * n_ + i;
+      const int ix = cells_[2 * k], iy = cells_[2 * k + 1];
+      offsets_[k] = static_cast<long>(iy) * search.nx_ + ix;
+      box = {std::min(box[0], ix), std::min(box[1], iy), std::max(box[2], ix), std::max(box[3], iy)};
+    }
+  }
   rotation_penalty_.resize(rotations_);
   for (int r = 0; r < rotations_; ++r) {
     const double e = (r - half_rotations_) * step_rad_ / params.prior_sigma_rad;
@@ -223,9 +236,16 @@ WindowSearch::Scorer::Scorer(const WindowSearch& search, const std::vector<Point
 // Upper bound of the score of every pose of the node (exact at level 0).
 float WindowSearch::Scorer::Bound(int r, int level, int tx, int ty) const {
   ++evaluations;
-  const int* rc = &cells_[static_cast<std::size_t>(r) * n_ * 2];
   long sum = 0;
-  for (int i = 0; i < n_; ++i) sum += search_.LevelValue(level, rc[2 * i] + tx, rc[2 * i + 1] + ty);
+  const std::array<int, 4>& box = boxes_[r];
+  if (box[0] + tx >= 0 && box[1] + ty >= 0 && box[2] + tx < search_.nx_ && box[3] + ty < search_.ny_) {
+    const std::uint8_t* grid = search_.pyramid_[level].data() + static_cast<long>(ty) * search_.nx_ + tx;
+    const long* offsets = &offsets_[static_cast<std::size_t>(r) * n_];
+    for (int i = 0; i < n_; ++i) sum += grid[offsets[i]];
+  } else {
+    const int* rc = &cells_[static_cast<std::size_t>(r) * n_ * 2];
+    for (int i = 0; i < n_; ++i) sum += search_.LevelValue(level, rc[2 * i] + tx, rc[2 * i + 1] + ty);
+  }
   const int w = 1 << level;
   const int gx = GapToZero(tx, std::min(tx + w - 1, range_.x1));
   const int gy = GapToZero(ty, std::min(ty + w - 1, range_.y1));
