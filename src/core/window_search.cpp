@@ -88,6 +88,13 @@ WindowSearch::WindowSearch(const std::vector<Polyline>& model, const WindowSearc
   // Level 0: the likelihood field, 255 on a polyline.
   std::vector<std::uint8_t> field(static_cast<std::size_t>(nx_) * ny_, 0);
   const double inv_two_sigma2 = 1.0 / (2.0 * params_.hit_sigma_m * params_.hit_sigma_m);
+  // The squared distance beyond which a segment cannot raise a cell holding c (its value would
+  // round to c or less), with a margin for rounding: the exp is skipped there (same field).
+  std::array<double, 256> raises_within{};
+  for (int c = 0; c < 255; ++c) {
+    raises_within[c] = std::log(255.0 / (c + 0.5)) / inv_two_sigma2 * (1.0 + 1e-6) + 1e-12;
+  }
+  raises_within[255] = -1.0;
   for (std::size_t k = 0; k < segments.size(); ++k) {
     const internal::ModelSegment& s = segments[k];
     const Point2 smin = s.a.cwiseMin(s.b()) - Point2::Constant(reach_m);
@@ -99,9 +106,10 @@ WindowSearch::WindowSearch(const std::vector<Polyline>& model, const WindowSearc
     for (int iy = y0; iy <= y1; ++iy) {
       for (int ix = x0; ix <= x1; ++ix) {
         const Point2 centre = origin_ + resolution_m_ * Point2(ix + 0.5, iy + 0.5);
-        const double d2 = internal::MatchSegment(centre, s, static_cast<int>(k)).squared_distance;
-        const auto value = static_cast<std::uint8_t>(std::lround(255.0 * std::exp(-d2 * inv_two_sigma2)));
         std::uint8_t& cell = field[static_cast<std::size_t>(iy) * nx_ + ix];
+        const double d2 = internal::MatchSegment(centre, s, static_cast<int>(k)).squared_distance;
+        if (d2 > raises_within[cell]) continue;
+        const auto value = static_cast<std::uint8_t>(std::lround(255.0 * std::exp(-d2 * inv_two_sigma2)));
         cell = std::max(cell, value);
       }
     }
