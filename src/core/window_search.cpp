@@ -115,21 +115,26 @@ WindowSearch::WindowSearch(const std::vector<Polyline>& model, const WindowSearc
     }
   }
   // Level k: the maximum over the 2^k x 2^k cells from (ix, iy) up, so that its value bounds
-  // every translation of a node 2^k cells wide.
+  // every translation of a node 2^k cells wide. Cells past the grid count 0; the maximum is
+  // taken along x, then along y (the same maximum, in loops the compiler vectorises).
   pyramid_.push_back(std::move(field));
+  const std::size_t w = static_cast<std::size_t>(nx_);
+  std::vector<std::uint8_t> along_x(pyramid_.back().size());
   for (int level = 1; level < levels_; ++level) {
-    const int half = 1 << (level - 1);
+    const std::size_t half = std::size_t{1} << (level - 1);
     const std::vector<std::uint8_t>& below = pyramid_.back();
-    std::vector<std::uint8_t> up(below.size(), 0);
-    auto at = [&](int ix, int iy) -> std::uint8_t {
-      return ix < nx_ && iy < ny_ ? below[static_cast<std::size_t>(iy) * nx_ + ix] : 0;
-    };
-    for (int iy = 0; iy < ny_; ++iy) {
-      for (int ix = 0; ix < nx_; ++ix) {
-        up[static_cast<std::size_t>(iy) * nx_ + ix] =
-            std::max({at(ix, iy), at(ix + half, iy), at(ix, iy + half), at(ix + half, iy + half)});
-      }
+    const std::size_t inner = half < w ? w - half : 0;
+    for (std::size_t row = 0; row < below.size(); row += w) {
+      const std::uint8_t* b = below.data() + row;
+      std::uint8_t* out = along_x.data() + row;
+      for (std::size_t ix = 0; ix < inner; ++ix) out[ix] = std::max(b[ix], b[ix + half]);
+      for (std::size_t ix = inner; ix < w; ++ix) out[ix] = b[ix];
     }
+    std::vector<std::uint8_t> up(below.size());
+    const std::size_t shift = half * w;
+    const std::size_t rows_inner = shift < along_x.size() ? along_x.size() - shift : 0;
+    for (std::size_t k = 0; k < rows_inner; ++k) up[k] = std::max(along_x[k], along_x[k + shift]);
+    for (std::size_t k = rows_inner; k < along_x.size(); ++k) up[k] = along_x[k];
     pyramid_.push_back(std::move(up));
   }
 }
