@@ -139,6 +139,12 @@ struct ShapeSlamParams {
   /// extra search instead of a map turned by the glitch. 0: off.
   double odometry_check_fit = 0.5;
   double odometry_override_margin = 0.2;
+  /// ... unless the robot would have moved faster than this since the last scan (m/s, by the
+  /// scans' timestamps, plus odometry_override_slack_m): a scan that disagrees with the
+  /// odometry by a jump no robot makes is a scan gone wrong, not an odometry glitch. 0: no
+  /// bound; scans without increasing timestamps are not bounded.
+  double odometry_override_max_speed_mps = 2.0;
+  double odometry_override_slack_m = 0.1;
   /// A scan whose pose no match confirmed still updates the map when less than this fraction
   /// of it lies within new_territory_distance_m (metres) of the visible map: new territory.
   double max_untrusted_coverage = 0.3;
@@ -406,6 +412,7 @@ class ShapeSlam {
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
   std::optional<Pose2> last_T_odom_robot_;
+  std::optional<double> last_timestamp_s_;  // of the last scan processed
   std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)

@@ -454,6 +454,33 @@ TEST(PipelineSubmapTest, OdometryGlitchIsOverriddenByTheScans) {
   EXPECT_GT(MapWithFaults(glitched, unchecked).ate_m, 2.0 * with_check.ate_m);
 }
 
+// The other way round: one scan gone wrong (its ranges are those of a scan 1.2 m further on,
+// 0.1 s later; the odometry is right). Matched without the odometry it would fit where it was
+// really taken, but a robot cannot have moved there since the last scan
+// (odometry_override_max_speed_mps): the odometry is kept. With the bound off the scan drags
+// the pose 1.2 m ahead and back.
+TEST(PipelineTest, AScanGoneWrongDoesNotOverrideGoodOdometry) {
+  SimRun run = Simulate(3);
+  std::size_t at = 0;
+  for (std::size_t i = 20; i + 8 < run.scans.size() && at == 0; ++i) {
+    const Pose2 d = run.truth[i].pose.Inverse() * run.truth[i + 8].pose;
+    if (std::abs(d.theta) < 1e-9 && std::abs(d.x - 1.2) < 0.05) at = i;
+  }
+  ASSERT_GT(at, 0u);
+  run.scans[at].ranges_m = run.scans[at + 8].ranges_m;
+  const auto jump_at = [&](const ShapeSlamParams& params) {
+    const Outcome outcome = Map(run, params);
+    const Pose2 estimated = outcome.trajectory[at - 1].pose.Inverse() * outcome.trajectory[at].pose;
+    const Pose2 truth = run.truth[at - 1].pose.Inverse() * run.truth[at].pose;
+    return (estimated.Translation() - truth.Translation()).norm();
+  };
+  ShapeSlamParams bounded;
+  EXPECT_LT(jump_at(bounded), 0.2);
+  ShapeSlamParams unbounded;
+  unbounded.odometry_override_max_speed_mps = 0.0;
+  EXPECT_GT(jump_at(unbounded), 0.5);
+}
+
 // A wheel-base bias of 2 deg per metre on top of the simulated odometry's own drift.
 TEST(PipelineSubmapTest, BiasedOdometryIsCorrectedByTheScans) {
   const SimRun clean = Simulate(2);
