@@ -17,8 +17,8 @@
 // shape hypotheses with the candidate selection (candidate_selection.h).
 #pragma once
 
-#include <cstdint>
 #include <array>
+#include <cstdint>
 #include <queue>
 #include <vector>
 
