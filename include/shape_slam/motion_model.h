@@ -33,6 +33,9 @@ class ConstantVelocity {
   void Add(const Pose2& T_prev_cur, bool confirmed);
   /// T_prev_cur predicted for the next scan, or nullopt before the first motion.
   std::optional<Pose2> Predict() const;
+  /// The longest translation among the last motions (velocity_window of them), metres; 0
+  /// before the first.
+  double LongestRecentStep() const;
 
  private:
   double UsualSpeed() const;  // metres per scan; 0 while fewer than 5 motions are confirmed

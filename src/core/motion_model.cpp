@@ -69,4 +69,10 @@ std::optional<Pose2> ConstantVelocity::Predict() const {
   return mean;
 }
 
+double ConstantVelocity::LongestRecentStep() const {
+  double longest = 0.0;
+  for (const Pose2& m : recent_motions_) longest = std::max(longest, m.Translation().norm());
+  return longest;
+}
+
 }  // namespace shape_slam

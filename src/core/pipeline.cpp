@@ -71,7 +71,7 @@ void ShapeSlamParams::Validate() const {
     throw std::invalid_argument("ShapeSlamParams::odometry_check_fit must be in [0, 1]");
   }
   NonNegative(odometry_override_margin, "ShapeSlamParams::odometry_override_margin");
-  NonNegative(odometry_override_max_speed_mps, "ShapeSlamParams::odometry_override_max_speed_mps");
+  NonNegative(odometry_override_step_ratio, "ShapeSlamParams::odometry_override_step_ratio");
   NonNegative(odometry_override_slack_m, "ShapeSlamParams::odometry_override_slack_m");
   Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
   if (!(max_lost_growth >= 1.0) || !std::isfinite(max_lost_growth)) {
@@ -512,15 +512,15 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
   if (!alt.trusted || alt.inlier_ratio < loc.inlier_ratio + params_.odometry_override_margin) {
     return;
   }
-  const double dt = last_timestamp_s_ ? scan.timestamp_s - *last_timestamp_s_ : 0.0;
-  if (params_.odometry_override_max_speed_mps > 0.0 && dt > 0.0) {
-    const Pose2 moved = scan.T_robot_sensor * alt.correction * scan.T_robot_sensor.Inverse();
-    if (moved.Translation().norm() >
-        params_.odometry_override_max_speed_mps * dt + params_.odometry_override_slack_m) {
-      return;
-    }
-  }
   const Pose2 T_pred_last = T_map_sensor_pred.Inverse() * T_map_sensor_last;
+  if (params_.odometry_override_step_ratio > 0.0) {
+    const auto robot_motion = [&](const Pose2& sensor_motion) {
+      return (scan.T_robot_sensor * sensor_motion * scan.T_robot_sensor.Inverse()).Translation().norm();
+    };
+    const double supported = std::max(robot_motion(T_pred_last.Inverse()),
+                                      params_.odometry_override_step_ratio * velocity_.LongestRecentStep());
+    if (robot_motion(alt.correction) > supported + params_.odometry_override_slack_m) return;
+  }
   alt.correction = T_pred_last * alt.correction;
   alt.odometry_overridden = true;
   loc = alt;
@@ -588,7 +588,6 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   }
   report.T_map_robot = GlobalPose(T_track_robot);
   last_T_map_robot_ = T_track_robot;
-  last_timestamp_s_ = scan.timestamp_s;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;
 }

@@ -50,7 +50,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "motion_prior_sigma_m", "... translation scale (m)", &p.motion_prior_sigma_m},
       {"pipeline", "odometry_check_fit", "a scan fitting less than this at the odometry's estimate is also matched without odometry (0: off)", &p.odometry_check_fit},
       {"pipeline", "odometry_override_margin", "... and that match wins when it fits at least this much better", &p.odometry_override_margin},
-      {"pipeline", "odometry_override_max_speed_mps", "... unless the robot would have moved faster than this since the last scan (m/s; 0: no bound) ...", &p.odometry_override_max_speed_mps},
+      {"pipeline", "odometry_override_step_ratio", "... unless it moves the robot farther than both the odometry's step and this many times its longest recent step (0: no bound) ...", &p.odometry_override_step_ratio},
       {"pipeline", "odometry_override_slack_m", "... plus this (m)", &p.odometry_override_slack_m},
       {"pipeline", "motion_prior_sigma_rad", "... rotation scale (rad)", &p.motion_prior_sigma_rad},
       {"pipeline", "max_lost_growth", "without odometry, bound and window grow by 1 + scans without a match, up to this", &p.max_lost_growth},

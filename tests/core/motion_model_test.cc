@@ -36,6 +36,17 @@ TEST(ConstantVelocity, PredictsTheMeanOfTheLastMotions) {
   EXPECT_NEAR(p.theta, 0.1, 1e-12);
 }
 
+// The longest step of the window bounds what an override of the odometry may claim.
+TEST(ConstantVelocity, LongestRecentStepIsThatOfTheWindow) {
+  ConstantVelocity velocity(UsualSpeed(0));
+  EXPECT_EQ(velocity.LongestRecentStep(), 0.0);
+  velocity.Add(Pose2(9.0, 0.0, 0.0), true);  // falls out of the window of 3
+  velocity.Add(Pose2(0.3, 0.4, 0.2), false);
+  velocity.Add(Pose2(0.1, 0.0, 1.0), true);
+  velocity.Add(Pose2(0.0, 0.0, 0.0), true);
+  EXPECT_NEAR(velocity.LongestRecentStep(), 0.5, 1e-12);
+}
+
 // A turn on the spot dilutes the mean; driving straight again, the prediction keeps the usual
 // speed (the median: one fast outlier does not move it), in the mean's direction.
 TEST(ConstantVelocity, DrivingStraightKeepsTheUsualSpeed) {
