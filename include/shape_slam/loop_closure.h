@@ -150,6 +150,13 @@ struct LoopClosureParams {
   /// standard deviations (a weak constraint), metres and radians.
   double unconfirmed_sigma_m = 0.3;
   double unconfirmed_sigma_rad = 0.1;
+  /// With submaps and without odometry, a keyframe no match confirmed is the motion model's
+  /// guess (SubmapParams::restart_when_lost): its edge has these standard deviations ...
+  double guess_sigma_m = 0.5;
+  double guess_sigma_rad = 0.5;
+  /// ... and the loop search counts it as this much driving (m): the search region, heading
+  /// range and correction bounds beyond it grow as after that much drift.
+  double guess_graph_m = 100.0;
   /// With submaps and without odometry, a keyframe's edge to the previous one is widened along
   /// a ridge of fits (internal::WidenedAlongRidge): shifts of up to this much (metres; 0: off)
   /// along the direction it constrains least are tried ...

@@ -63,6 +63,12 @@ struct SubmapParams {
   bool enabled = false;
   /// Keyframes per submap (each keyframe is inserted into two submaps).
   int keyframes = 40;
+  /// Without odometry, a scan that no match confirmed (its pose the constant-velocity guess) is
+  /// a keyframe that finishes the active submaps and starts new ones: the scans after it are
+  /// tracked against what it saw, not against a map it may be misplaced in, and its edge in
+  /// the pose graph is weak (LoopClosureParams::guess_*) for loop closure to correct. Off by
+  /// default: it mends intel's doorway but costs infinite-corridor (docs/design.md, Submaps).
+  bool restart_when_lost = false;
   void Validate() const;
 };
 
@@ -352,7 +358,7 @@ class ShapeSlam {
   MapUpdateStats InsertIntoSubmaps(const std::vector<Polyline>& perceived,
                                    const Pose2& T_local_sensor,
                                    const std::vector<VisiblePolyline>& visible_front,
-                                   const LaserScan& scan, bool trusted);
+                                   const LaserScan& scan, bool trusted, bool restart);
   void TrackOdometry(const LaserScan& scan);
   Prediction Predict(const LaserScan& scan) const;
   std::vector<Polyline> LastKeyframeIn(const std::vector<Polyline>& polylines,
@@ -378,10 +384,11 @@ class ShapeSlam {
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
-                               const Pose2& T_map_robot, bool trusted,
+                               const Pose2& T_map_robot, bool trusted, bool guessed,
                                const Eigen::Matrix3d& covariance) const;
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
-                   const Pose2& T_track_robot, bool trusted, const Eigen::Matrix3d& covariance);
+                   const Pose2& T_track_robot, bool trusted, bool guessed,
+                   const Eigen::Matrix3d& covariance);
   void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                     const Eigen::Matrix3d& covariance);
   void OptimizeAndRebuild(bool at_end);

@@ -20,6 +20,9 @@ struct PoseGraphEdge {
   Pose2 T_from_to;              ///< measured pose of node j in the frame of node i
   Eigen::Matrix3d covariance = Eigen::Matrix3d::Identity();  ///< of (x [m], y [m], theta [rad])
   bool loop = false;            ///< a loop closure (robust loss), not a consecutive edge
+  /// A consecutive step that only the motion model gave (no match, no odometry): the loop
+  /// search counts it as LoopClosureParams::guess_graph_m of driving.
+  bool guessed = false;
 };
 
 struct PoseGraphParams {

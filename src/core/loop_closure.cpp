@@ -105,14 +105,16 @@ std::optional<Pose2> ShapeCandidate(const ScanShapes& scan, const std::vector<Po
 }
 
 // Weighted adjacency of the pose graph: consecutive edges weigh the driving between their
-// keyframes, loop edges nothing (they tie the two places together).
+// keyframes (plus guess_m for a guessed step), loop edges nothing (they tie the two places
+// together).
 std::vector<std::vector<std::pair<int, double>>> Adjacency(const std::vector<LoopKeyframe>& keyframes,
-                                                           const PoseGraph& graph) {
+                                                           const PoseGraph& graph, double guess_m) {
   std::vector<double> travel(graph.NumNodes(), 0.0);
   for (const LoopKeyframe& kf : keyframes) travel.at(kf.node) = kf.travel_m;
   std::vector<std::vector<std::pair<int, double>>> adjacency(graph.NumNodes());
   for (const PoseGraphEdge& e : graph.Edges()) {
-    const double w = e.loop ? 0.0 : std::abs(travel[e.to] - travel[e.from]);
+    const double w =
+        e.loop ? 0.0 : std::abs(travel[e.to] - travel[e.from]) + (e.guessed ? guess_m : 0.0);
     adjacency[e.from].emplace_back(e.to, w);
     adjacency[e.to].emplace_back(e.from, w);
   }
@@ -171,6 +173,9 @@ void LoopClosureParams::Validate() const {
   NonNegative(candidate_spacing_m, "LoopClosureParams::candidate_spacing_m");
   Positive(unconfirmed_sigma_m, "LoopClosureParams::unconfirmed_sigma_m");
   Positive(unconfirmed_sigma_rad, "LoopClosureParams::unconfirmed_sigma_rad");
+  Positive(guess_sigma_m, "LoopClosureParams::guess_sigma_m");
+  Positive(guess_sigma_rad, "LoopClosureParams::guess_sigma_rad");
+  NonNegative(guess_graph_m, "LoopClosureParams::guess_graph_m");
   NonNegative(ridge_max_shift_m, "LoopClosureParams::ridge_max_shift_m");
   Fraction(ridge_fit_margin, "LoopClosureParams::ridge_fit_margin");
   Positive(max_correction_m, "LoopClosureParams::max_correction_m");
@@ -234,7 +239,7 @@ double LoopCloser::CorrectionBoundRad(double graph_distance_m) const {
 // their relative pose. Indexed by keyframe.
 std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& keyframes,
                                                const PoseGraph& graph, int from) const {
-  const auto adjacency = Adjacency(keyframes, graph);
+  const auto adjacency = Adjacency(keyframes, graph, params_.guess_graph_m);
   std::vector<double> node_distance(graph.NumNodes(), std::numeric_limits<double>::infinity());
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;

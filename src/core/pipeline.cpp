@@ -20,9 +20,12 @@ using internal::Positive;
 
 using internal::ValidateScan;  // shared with the localizer
 
+Eigen::Matrix3d DiagonalCovariance(double sigma_m, double sigma_rad) {
+  return Eigen::Vector3d(sigma_m * sigma_m, sigma_m * sigma_m, sigma_rad * sigma_rad).asDiagonal();
+}
+
 Eigen::Matrix3d UnconfirmedCovariance(const LoopClosureParams& p) {
-  const double m2 = p.unconfirmed_sigma_m * p.unconfirmed_sigma_m;
-  return Eigen::Vector3d(m2, m2, p.unconfirmed_sigma_rad * p.unconfirmed_sigma_rad).asDiagonal();
+  return DiagonalCovariance(p.unconfirmed_sigma_m, p.unconfirmed_sigma_rad);
 }
 
 }  // namespace
@@ -215,9 +218,14 @@ Pose2 ShapeSlam::GlobalPose(const Pose2& T_track_robot) const {
 MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceived,
                                             const Pose2& T_local_sensor,
                                             const std::vector<VisiblePolyline>& visible_front,
-                                            const LaserScan& scan, bool trusted) {
+                                            const LaserScan& scan, bool trusted,
+                                            bool restart) {
   const int keyframe = static_cast<int>(keyframes_.size());
   const int half = std::max(1, params_.submaps.keyframes / 2);
+  if (restart) {  // a guessed keyframe: the active submaps end before it
+    for (Submap& submap : active_submaps_) finished_submaps_.push_back(std::move(submap));
+    active_submaps_.clear();
+  }
   if (active_submaps_.empty() || active_submaps_.back().num_keyframes >= half) {
     active_submaps_.push_back({PolylineMap(params_.index_cell_size_m), keyframe, 0});
   }
@@ -226,8 +234,9 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
     Submap& submap = active_submaps_[i];
     const bool front = i == 0;
     std::vector<VisiblePolyline> visible =
-        front ? visible_front
-              : submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
+        front && !restart
+            ? visible_front
+            : submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
     MapUpdateStats stats = UpdateMap(submap.map, perceived, T_local_sensor, visible, scan,
                                      trusted || submap.map.Empty(), params_.map_update);
     ++submap.num_keyframes;
@@ -244,7 +253,7 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
 // a pose corrected against older parts of the map enters the graph as a loop closure (found by
 // SearchLoop) rather than as a jump in the odometry chain.
 PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
-                                        const Pose2& T_map_robot, bool trusted,
+                                        const Pose2& T_map_robot, bool trusted, bool guessed,
                                         const Eigen::Matrix3d& covariance) const {
   const int previous = static_cast<int>(keyframes_.size()) - 1;
   const Keyframe& prev = keyframes_[previous];
@@ -252,9 +261,13 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   PoseGraphEdge edge;
   edge.from = places_[previous].node;
   edge.T_from_to = TrackingPose(previous).Inverse() * T_map_robot;
-  // An unconfirmed step (odometry or nothing) is a weak constraint.
-  edge.covariance = trusted ? EdgeCovariance(covariance, params_.loop_closure)
-                            : UnconfirmedCovariance(params_.loop_closure);
+  // An unconfirmed step (odometry or nothing) is a weak constraint; the motion model's guess
+  // (no odometry) a weaker one, which the loop search counts as a long drive.
+  const LoopClosureParams& lc = params_.loop_closure;
+  edge.covariance = trusted ? EdgeCovariance(covariance, lc)
+                    : guessed ? DiagonalCovariance(lc.guess_sigma_m, lc.guess_sigma_rad)
+                              : UnconfirmedCovariance(lc);
+  edge.guessed = guessed;
   const std::vector<Point2> samples =
       internal::AlignmentSamples(fine, params_.matcher.alignment.sample_spacing_m);
   if (samples.empty() || prev_fine.empty()) return edge;
@@ -266,7 +279,6 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   // that a loop closure corrects a slide without bending the rest of the path. Only with
   // submaps: in the global design the graph's corrections come back into the tracking through
   // the rebuilt map, and the softer corridors made its worst copies worse (docs/notebook.md).
-  const LoopClosureParams& lc = params_.loop_closure;
   const bool widen = UseSubmaps() && odometry_.status != OdometryStatus::kUsed &&
                      lc.ridge_max_shift_m > 0.0;
   // One model for the fit check and the ridge (its open ends only prepared when widening).
@@ -275,7 +287,8 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
                                  widen ? internal::RidgeOpenEndM(lc.ridge_max_shift_m) : 0.0);
   if (local.converged && check.InlierRatio(samples, local.T_map_scan) >= params_.min_inlier_ratio) {
     edge.T_from_to = prev.scan.T_robot_sensor * local.T_map_scan * scan.T_robot_sensor.Inverse();
-    edge.covariance = EdgeCovariance(local.covariance, params_.loop_closure);
+    edge.covariance = EdgeCovariance(local.covariance, lc);
+    edge.guessed = false;
     if (widen) {
       edge.covariance = internal::WidenedAlongRidge(samples, check, local.T_map_scan,
                                                     edge.covariance, lc.ridge_max_shift_m,
@@ -288,9 +301,11 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
 // A new pose-graph node, tied to the previous keyframe.
 void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
                             std::vector<Polyline> fine, const Pose2& T_track_robot,
-                            bool trusted, const Eigen::Matrix3d& covariance) {
+                            bool trusted, bool guessed, const Eigen::Matrix3d& covariance) {
   std::optional<PoseGraphEdge> edge;
-  if (!keyframes_.empty()) edge = SequentialEdge(fine, scan, T_track_robot, trusted, covariance);
+  if (!keyframes_.empty()) {
+    edge = SequentialEdge(fine, scan, T_track_robot, trusted, guessed, covariance);
+  }
   const Pose2 T_map_robot = GlobalPose(T_track_robot);
   const int node = graph_.AddNode(T_map_robot);
   if (edge) {
@@ -534,6 +549,7 @@ struct ShapeSlam::Registration {
   internal::Localization loc;
   std::vector<VisiblePolyline> visible;
   bool model_empty = true;  // nothing to register against yet (the first scan)
+  bool guessed = false;     // placed by the motion model alone (SubmapParams::restart_when_lost)
 };
 
 // One scan through the pipeline: extract (§3.1) -> predict -> register (§3, §4.2-§4.3, §5.1)
@@ -577,9 +593,15 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 
   // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
   // (new territory); elsewhere it would blur or duplicate what is there.
-  const bool may_update = loc.trusted || registration.model_empty ||
+  // With submaps and without odometry such a scan may be a keyframe all the same, the first of
+  // new submaps (SubmapParams::restart_when_lost): the next scans are tracked against what it
+  // saw, and only its guessed step to the previous keyframe is left for loop closure to correct.
+  registration.guessed = UseSubmaps() && params_.submaps.restart_when_lost && !loc.trusted &&
+                         !registration.model_empty && !report.used_odometry;
+  const bool may_update = loc.trusted || registration.model_empty || registration.guessed ||
                           loc.coverage < params_.max_untrusted_coverage;
-  if (!shapes.fine.empty() && may_update && IsKeyframe(T_track_robot)) {
+  if (!shapes.fine.empty() && may_update &&
+      (registration.guessed || IsKeyframe(T_track_robot))) {
     T_track_robot = UpdateMapAndGraph(std::move(shapes), scan, T_map_sensor, registration, report);
   }
   if (!keyframes_.empty()) {
@@ -670,7 +692,8 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   }
   const bool trusted = loc.trusted || registration.model_empty;
   if (UseSubmaps()) {
-    report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, trusted);
+    report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, trusted,
+                                          registration.guessed);
   } else {
     report.map_update =
         UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
@@ -679,7 +702,7 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   report.keyframe = true;
   const Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), T_track_robot, trusted,
-              loc.covariance);
+              registration.guessed, loc.covariance);
   CheckpointMap(static_cast<int>(keyframes_.size()));
   if (!loop_closer_.Update(places_, graph_)) return T_track_robot;
   OptimizeAndRebuild(/*at_end=*/false);

@@ -488,6 +488,48 @@ TEST(PipelineSubmapTest, BiasedOdometryIsCorrectedByTheScans) {
   EXPECT_LT(MapWithFaults(biased, SubmapParamsWith(20)).ate_m, 0.05);
 }
 
+// Without odometry, a scan that no match places (here one of a round room) is a keyframe at the motion model's guess that starts new submaps, tied to the previous
+// keyframe by a weak, guessed edge; the scans after it are tracked against what it saw
+// and the closed loop is still right. With restart_when_lost off (the default) the scan is
+// left out.
+TEST(PipelineSubmapTest, AScanNoMatchPlacesStartsNewSubmapsWithAGuessedEdge) {
+  SimRun run = Simulate(1);
+  for (LaserScan& scan : run.scans) scan.T_odom_robot.reset();
+  const std::size_t at = run.scans.size() / 3;
+  for (double& r : run.scans[at].ranges_m) r = 2.0;
+  const auto map_it = [&](const ShapeSlamParams& params, ScanReport& report_at, int& guessed,
+                          std::size_t& finished_before, std::size_t& finished_after) {
+    ShapeSlam slam(params);
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      if (i == at) finished_before = slam.FinishedSubmaps().size();
+      const ScanReport report = slam.Process(run.scans[i]);
+      if (i == at) {
+        report_at = report;
+        finished_after = slam.FinishedSubmaps().size();
+      }
+    }
+    guessed = 0;
+    for (const PoseGraphEdge& e : slam.Graph().Edges()) guessed += e.guessed ? 1 : 0;
+    slam.Finish();
+    return EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m;
+  };
+  ScanReport report;
+  int guessed = 0;
+  std::size_t before = 0, after = 0;
+  ShapeSlamParams on = SubmapParamsWith(20);
+  on.submaps.restart_when_lost = true;
+  const double ate = map_it(on, report, guessed, before, after);
+  EXPECT_FALSE(report.matched);
+  EXPECT_TRUE(report.keyframe);
+  EXPECT_EQ(after, before + 2);  // both active submaps finished early
+  EXPECT_GE(guessed, 1);
+  EXPECT_LT(ate, 0.1);
+  map_it(SubmapParamsWith(20), report, guessed, before, after);  // the default: off
+  EXPECT_FALSE(report.matched);
+  EXPECT_FALSE(report.keyframe);
+  EXPECT_EQ(guessed, 0);
+}
+
 TEST(PipelineSubmapTest, InvalidSubmapParamsAreRefused) {
   ShapeSlamParams params = SubmapParamsWith(1);
   EXPECT_THROW(ShapeSlam{params}, std::invalid_argument);
