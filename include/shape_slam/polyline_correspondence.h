@@ -59,7 +59,9 @@ struct CorrespondenceSolution {
 /// Minimises eq. (4) by dynamic programming. Linear orders: O(a * b * g^2) cost evaluations and
 /// O(a * b * g) steps for a scan of a polylines, a model of b and groups up to g; a cyclic model
 /// multiplies the steps (not the cost evaluations, which are cached) by b, i.e. O(n^3) as in
-/// §4.2. Ties are broken deterministically. Throws std::invalid_argument on a missing cost
+/// §4.2; with non-negative costs (eq. 4's are) a rotation is abandoned once it cannot beat the
+/// best so far, which leaves the result unchanged. Ties are broken deterministically (the first
+/// rotation of least cost). Throws std::invalid_argument on a missing cost
 /// function or a group size < 1.
 CorrespondenceSolution SolveCorrespondence(const CorrespondenceProblem& problem);
 

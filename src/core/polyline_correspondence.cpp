@@ -33,15 +33,20 @@ class CostCache {
       const std::optional<double> cost =
           problem_.group_cost(scan_first, scan_count, model_first, model_count);
       value = cost && std::isfinite(*cost) ? *cost : kInf;
+      if (value < 0.0) negative_ = true;
     }
     return value;
   }
+
+  /// Whether a group cost below 0 came up (then no rotation may be abandoned early).
+  bool SawNegative() const { return negative_; }
 
  private:
   const CorrespondenceProblem& problem_;
   int num_model_;
   int g_;
   std::vector<double> values_;
+  bool negative_ = false;
 };
 
 // What the optimal step into a DP cell was.
@@ -102,6 +107,51 @@ CorrespondenceSolution SolveRotation(const CorrespondenceProblem& problem, CostC
   return solution;
 }
 
+// The least cost of one model rotation (the same DP as SolveRotation, same order of operations,
+// so the same value), without the steps. With non-negative costs a path's cost is at least that
+// of its last cell in the g rows before any row, so the rotation is abandoned (+inf) as soon as
+// those rows hold nothing below `bound`. `dp` and `row_min` are reused buffers.
+double RotationCost(const CorrespondenceProblem& problem, CostCache& cache, int rotation,
+                    double bound, std::vector<double>& dp, std::vector<double>& row_min) {
+  const int a = static_cast<int>(problem.scan_skip_penalty.size());
+  const int b = static_cast<int>(problem.model_skip_penalty.size());
+  const int g = problem.max_group_size;
+  const int w = b + 1;
+  dp.assign(static_cast<std::size_t>(a + 1) * w, kInf);
+  row_min.assign(a + 1, kInf);
+  dp[0] = 0.0;
+  for (int i = 0; i <= a; ++i) {
+    if (i > 0 && bound < kInf) {
+      double lower = kInf;
+      for (int r = std::max(0, i - g); r < i; ++r) lower = std::min(lower, row_min[r]);
+      if (lower >= bound) return kInf;
+    }
+    double* row = &dp[static_cast<std::size_t>(i) * w];
+    for (int k = 0; k <= b; ++k) {
+      const double here = row[k];
+      if (here == kInf) continue;
+      row_min[i] = std::min(row_min[i], here);
+      if (i < a) {
+        double& cell = dp[static_cast<std::size_t>(i + 1) * w + k];
+        cell = std::min(cell, here + problem.scan_skip_penalty[i]);
+      }
+      const int model = rotation + k < b ? rotation + k : rotation + k - b;
+      if (k < b) row[k + 1] = std::min(row[k + 1], here + problem.model_skip_penalty[model]);
+      for (int gs = 1; gs <= g && i + gs <= a; ++gs) {
+        for (int gm = 1; gm <= g && k + gm <= b; ++gm) {
+          if (gs > 1 && gm > 1) break;  // only 1-to-1, 1-to-many and many-to-1
+          const double cost = cache.Get(i, gs, model, gm);
+          if (cost < kInf) {
+            double& cell = dp[static_cast<std::size_t>(i + gs) * w + k + gm];
+            cell = std::min(cell, here + cost);
+          }
+        }
+      }
+    }
+  }
+  return dp.back();
+}
+
 }  // namespace
 
 CorrespondenceSolution SolveCorrespondence(const CorrespondenceProblem& problem) {
@@ -128,13 +178,31 @@ CorrespondenceSolution SolveCorrespondence(const CorrespondenceProblem& problem)
       std::iota(rotations.begin(), rotations.end(), 0);
     }
   }
-  std::optional<CorrespondenceSolution> best;
   for (const int r : rotations) {
     if (r < 0 || r >= b) throw std::invalid_argument("SolveCorrespondence: rotation out of range");
-    CorrespondenceSolution candidate = SolveRotation(problem, cache, r);
-    if (!best || candidate.total_cost < best->total_cost) best = std::move(candidate);
   }
-  return *best;
+  if (rotations.size() == 1) return SolveRotation(problem, cache, rotations.front());
+  // The least cost of every rotation first (the first of equal ones wins), early abandoning
+  // those that cannot beat the best so far; then the steps of the best alone.
+  const auto negative = [](double v) { return v < 0.0; };
+  const bool may_abandon =
+      std::none_of(problem.scan_skip_penalty.begin(), problem.scan_skip_penalty.end(), negative) &&
+      std::none_of(problem.model_skip_penalty.begin(), problem.model_skip_penalty.end(), negative);
+  std::vector<double> dp, row_min;
+  const auto best_rotation = [&](bool abandon) {
+    int best = rotations.front();
+    double best_cost = kInf;
+    bool first = true;
+    for (const int r : rotations) {
+      const double cost = RotationCost(problem, cache, r, abandon ? best_cost : kInf, dp, row_min);
+      if (first || cost < best_cost) best = r, best_cost = cost;
+      first = false;
+    }
+    return best;
+  };
+  int best = best_rotation(may_abandon);
+  if (may_abandon && cache.SawNegative()) best = best_rotation(false);  // no bound holds then
+  return SolveRotation(problem, cache, best);
 }
 
 }  // namespace shape_slam
