@@ -150,8 +150,8 @@ struct LoopClosureParams {
   /// standard deviations (a weak constraint), metres and radians.
   double unconfirmed_sigma_m = 0.3;
   double unconfirmed_sigma_rad = 0.1;
-  /// With submaps and without odometry, a keyframe no match confirmed is the motion model's
-  /// guess (SubmapParams::restart_when_lost): its edge has these standard deviations ...
+  /// With SubmapParams::restart_when_lost (submaps, no odometry), a keyframe no match confirmed
+  /// is the motion model's guess: its edge has these standard deviations ...
   double guess_sigma_m = 0.5;
   double guess_sigma_rad = 0.5;
   /// ... and the loop search counts it as this much driving (m): the search region, heading
