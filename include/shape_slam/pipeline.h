@@ -63,12 +63,16 @@ struct SubmapParams {
   bool enabled = false;
   /// Keyframes per submap (each keyframe is inserted into two submaps).
   int keyframes = 40;
-  /// Without odometry, a scan that no match confirmed (its pose the constant-velocity guess) is
-  /// a keyframe that finishes the active submaps and starts new ones: the scans after it are
-  /// tracked against what it saw, not against a map it may be misplaced in, and its edge in
-  /// the pose graph is weak (LoopClosureParams::guess_*) for loop closure to correct. Off by
-  /// default: it mends intel's doorway but costs infinite-corridor (docs/design.md, Submaps).
-  bool restart_when_lost = false;
+  /// Without odometry, a scan that no match confirmed (its pose the constant-velocity guess),
+  /// and whose best candidate lies farther than restart_follow_* from that guess (nothing
+  /// explains where it is: beyond a doorway, say, rather than a poor scan on the robot's
+  /// path), is a keyframe that finishes the active submaps and starts new ones: the scans
+  /// after it are tracked against what it saw, not against a map it may be misplaced in, and
+  /// its edge in the pose graph is weak (LoopClosureParams::guess_*) for loop closure to
+  /// correct (docs/design.md, Submaps).
+  bool restart_when_lost = true;
+  double restart_follow_m = 0.3;
+  double restart_follow_rad = 0.175;
   void Validate() const;
 };
 

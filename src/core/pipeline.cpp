@@ -37,6 +37,8 @@ void KeyframeParams::Validate() const {
 
 void SubmapParams::Validate() const {
   if (keyframes < 2) throw std::invalid_argument("SubmapParams::keyframes must be >= 2");
+  NonNegative(restart_follow_m, "SubmapParams::restart_follow_m");
+  NonNegative(restart_follow_rad, "SubmapParams::restart_follow_rad");
 }
 
 void ShapeSlamParams::Validate() const {
@@ -593,11 +595,13 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 
   // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
   // (new territory); elsewhere it would blur or duplicate what is there.
-  // With submaps and without odometry such a scan may be a keyframe all the same, the first of
-  // new submaps (SubmapParams::restart_when_lost): the next scans are tracked against what it
-  // saw, and only its guessed step to the previous keyframe is left for loop closure to correct.
+  // With submaps and without odometry such a scan, unless its best candidate follows the
+  // robot's motion, may be a keyframe all the same, the first of new submaps
+  // (SubmapParams::restart_when_lost): the next scans are tracked against what it saw, and only
+  // its guessed step to the previous keyframe is left for loop closure to correct.
   registration.guessed = UseSubmaps() && params_.submaps.restart_when_lost && !loc.trusted &&
-                         !registration.model_empty && !report.used_odometry;
+                         !loc.follows_motion && !registration.model_empty &&
+                         !report.used_odometry;
   const bool may_update = loc.trusted || registration.model_empty || registration.guessed ||
                           loc.coverage < params_.max_untrusted_coverage;
   if (!shapes.fine.empty() && may_update &&

@@ -490,8 +490,7 @@ TEST(PipelineSubmapTest, BiasedOdometryIsCorrectedByTheScans) {
 
 // Without odometry, a scan that no match places (here one of a round room) is a keyframe at the motion model's guess that starts new submaps, tied to the previous
 // keyframe by a weak, guessed edge; the scans after it are tracked against what it saw
-// and the closed loop is still right. With restart_when_lost off (the default) the scan is
-// left out.
+// and the closed loop is still right. With restart_when_lost off the scan is left out.
 TEST(PipelineSubmapTest, AScanNoMatchPlacesStartsNewSubmapsWithAGuessedEdge) {
   SimRun run = Simulate(1);
   for (LaserScan& scan : run.scans) scan.T_odom_robot.reset();
@@ -516,15 +515,15 @@ TEST(PipelineSubmapTest, AScanNoMatchPlacesStartsNewSubmapsWithAGuessedEdge) {
   ScanReport report;
   int guessed = 0;
   std::size_t before = 0, after = 0;
-  ShapeSlamParams on = SubmapParamsWith(20);
-  on.submaps.restart_when_lost = true;
-  const double ate = map_it(on, report, guessed, before, after);
+  const double ate = map_it(SubmapParamsWith(20), report, guessed, before, after);
   EXPECT_FALSE(report.matched);
   EXPECT_TRUE(report.keyframe);
   EXPECT_EQ(after, before + 2);  // both active submaps finished early
   EXPECT_GE(guessed, 1);
   EXPECT_LT(ate, 0.1);
-  map_it(SubmapParamsWith(20), report, guessed, before, after);  // the default: off
+  ShapeSlamParams off = SubmapParamsWith(20);
+  off.submaps.restart_when_lost = false;
+  map_it(off, report, guessed, before, after);
   EXPECT_FALSE(report.matched);
   EXPECT_FALSE(report.keyframe);
   EXPECT_EQ(guessed, 0);
