@@ -352,6 +352,10 @@ class ShapeSlam {
     int keyframe = 0;
     Pose2 T_keyframe_robot;
   };
+  // What placed a keyframe: a trusted match; the prediction (odometry, or without it the
+  // constant-velocity guess) left unconfirmed; or the motion model's guess after a lost scan
+  // that starts new submaps (SubmapParams::restart_when_lost).
+  enum class Placement { kMatched, kUnconfirmed, kGuessed };
   bool UseSubmaps() const { return params_.submaps.enabled; }
   // The map each scan is registered against and its frame: the older active submap in the
   // local frame, or the global map.
@@ -362,7 +366,7 @@ class ShapeSlam {
   MapUpdateStats InsertIntoSubmaps(const std::vector<Polyline>& perceived,
                                    const Pose2& T_local_sensor,
                                    const std::vector<VisiblePolyline>& visible_front,
-                                   const LaserScan& scan, bool trusted, bool restart);
+                                   const LaserScan& scan, Placement placement);
   void TrackOdometry(const LaserScan& scan);
   Prediction Predict(const LaserScan& scan) const;
   std::vector<Polyline> LastKeyframeIn(const std::vector<Polyline>& polylines,
@@ -388,10 +392,10 @@ class ShapeSlam {
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
-                               const Pose2& T_map_robot, bool trusted, bool guessed,
+                               const Pose2& T_map_robot, Placement placement,
                                const Eigen::Matrix3d& covariance) const;
   void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
-                   const Pose2& T_track_robot, bool trusted, bool guessed,
+                   const Pose2& T_track_robot, Placement placement,
                    const Eigen::Matrix3d& covariance);
   void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                     const Eigen::Matrix3d& covariance);

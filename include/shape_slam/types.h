@@ -51,6 +51,13 @@ struct Pose2 {
   }
 };
 
+/// A motion between two poses of a rigid body, re-expressed for a frame mounted on it at
+/// T_body_frame (the same physical motion seen from the frame, e.g. the robot's odometry step as
+/// the sensor's): T_body_frame^-1 * T_body_motion * T_body_frame.
+inline Pose2 MotionInFrame(const Pose2& T_body_motion, const Pose2& T_body_frame) {
+  return T_body_frame.Inverse() * T_body_motion * T_body_frame;
+}
+
 /// Whether two poses lie closer than max_m in translation and max_rad in heading.
 inline bool PosesWithin(const Pose2& a, const Pose2& b, double max_m, double max_rad) {
   return (a.Translation() - b.Translation()).norm() < max_m &&

@@ -191,11 +191,7 @@ class TrackingSearch {
   /// that was moving most likely still is). Its coverage decides whether it may still update
   /// the map (new territory).
   void Unconfirmed(Localization& loc) const {
-    if (!guess_ && velocity_hint_ && loc.inlier_ratio > 0.0) {  // a refinement converged
-      const Pose2 d = velocity_hint_->Inverse() * loc.correction;
-      loc.follows_motion = d.Translation().norm() <= params_.submaps.restart_follow_m &&
-                           std::abs(d.theta) <= params_.submaps.restart_follow_rad;
-    }
+    if (loc.inlier_ratio > 0.0) loc.best_untrusted = loc.correction;  // a refinement converged
     loc.correction = guess_ ? Pose2() : velocity_hint_.value_or(Pose2());
     const SegmentGrid near(MakeModelSegments(all_), params_.new_territory_distance_m);
     loc.coverage = InlierRatio(samples_, near, loc.correction);

@@ -164,7 +164,7 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   if (odometry_delta) {
     T_map_robot_pred = hypothesis.T_map_robot * *odometry_delta;
   } else if (const std::optional<Pose2> v = hypothesis.velocity.Predict()) {
-    velocity_hint = scan.T_robot_sensor.Inverse() * *v * scan.T_robot_sensor;
+    velocity_hint = MotionInFrame(*v, scan.T_robot_sensor);
   }
   const Pose2 T_map_sensor_pred = T_map_robot_pred * scan.T_robot_sensor;
   Verified verified;

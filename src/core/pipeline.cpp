@@ -220,10 +220,10 @@ Pose2 ShapeSlam::GlobalPose(const Pose2& T_track_robot) const {
 MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceived,
                                             const Pose2& T_local_sensor,
                                             const std::vector<VisiblePolyline>& visible_front,
-                                            const LaserScan& scan, bool trusted,
-                                            bool restart) {
+                                            const LaserScan& scan, Placement placement) {
   const int keyframe = static_cast<int>(keyframes_.size());
   const int half = std::max(1, params_.submaps.keyframes / 2);
+  const bool restart = placement == Placement::kGuessed;
   if (restart) {  // a guessed keyframe: the active submaps end before it
     for (Submap& submap : active_submaps_) finished_submaps_.push_back(std::move(submap));
     active_submaps_.clear();
@@ -235,12 +235,15 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
   for (std::size_t i = 0; i < active_submaps_.size(); ++i) {
     Submap& submap = active_submaps_[i];
     const bool front = i == 0;
-    std::vector<VisiblePolyline> visible =
-        front && !restart
-            ? visible_front
-            : submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
-    MapUpdateStats stats = UpdateMap(submap.map, perceived, T_local_sensor, visible, scan,
-                                     trusted || submap.map.Empty(), params_.map_update);
+    std::vector<VisiblePolyline> visible;  // none in a new submap
+    if (front && !restart) {
+      visible = visible_front;
+    } else if (!submap.map.Empty()) {
+      visible = submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
+    }
+    const bool trusted = placement == Placement::kMatched || submap.map.Empty();
+    MapUpdateStats stats =
+        UpdateMap(submap.map, perceived, T_local_sensor, visible, scan, trusted, params_.map_update);
     ++submap.num_keyframes;
     if (front) front_stats = std::move(stats);
   }
@@ -255,7 +258,7 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
 // a pose corrected against older parts of the map enters the graph as a loop closure (found by
 // SearchLoop) rather than as a jump in the odometry chain.
 PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
-                                        const Pose2& T_map_robot, bool trusted, bool guessed,
+                                        const Pose2& T_map_robot, Placement placement,
                                         const Eigen::Matrix3d& covariance) const {
   const int previous = static_cast<int>(keyframes_.size()) - 1;
   const Keyframe& prev = keyframes_[previous];
@@ -266,10 +269,10 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   // An unconfirmed step (odometry or nothing) is a weak constraint; the motion model's guess
   // (no odometry) a weaker one, which the loop search counts as a long drive.
   const LoopClosureParams& lc = params_.loop_closure;
-  edge.covariance = trusted ? EdgeCovariance(covariance, lc)
-                    : guessed ? DiagonalCovariance(lc.guess_sigma_m, lc.guess_sigma_rad)
-                              : UnconfirmedCovariance(lc);
-  edge.guessed = guessed;
+  edge.guessed = placement == Placement::kGuessed;
+  edge.covariance = placement == Placement::kMatched ? EdgeCovariance(covariance, lc)
+                    : edge.guessed ? DiagonalCovariance(lc.guess_sigma_m, lc.guess_sigma_rad)
+                                   : UnconfirmedCovariance(lc);
   const std::vector<Point2> samples =
       internal::AlignmentSamples(fine, params_.matcher.alignment.sample_spacing_m);
   if (samples.empty() || prev_fine.empty()) return edge;
@@ -303,11 +306,10 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
 // A new pose-graph node, tied to the previous keyframe.
 void ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
                             std::vector<Polyline> fine, const Pose2& T_track_robot,
-                            bool trusted, bool guessed, const Eigen::Matrix3d& covariance) {
+                            Placement placement, const Eigen::Matrix3d& covariance) {
+  const bool trusted = placement == Placement::kMatched;
   std::optional<PoseGraphEdge> edge;
-  if (!keyframes_.empty()) {
-    edge = SequentialEdge(fine, scan, T_track_robot, trusted, guessed, covariance);
-  }
+  if (!keyframes_.empty()) edge = SequentialEdge(fine, scan, T_track_robot, placement, covariance);
   const Pose2 T_map_robot = GlobalPose(T_track_robot);
   const int node = graph_.AddNode(T_map_robot);
   if (edge) {
@@ -531,8 +533,9 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
   }
   const Pose2 T_pred_last = T_map_sensor_pred.Inverse() * T_map_sensor_last;
   if (params_.odometry_override_step_ratio > 0.0) {
+    const Pose2 T_sensor_robot = scan.T_robot_sensor.Inverse();
     const auto robot_motion = [&](const Pose2& sensor_motion) {
-      return (scan.T_robot_sensor * sensor_motion * scan.T_robot_sensor.Inverse()).Translation().norm();
+      return MotionInFrame(sensor_motion, T_sensor_robot).Translation().norm();
     };
     const double supported = std::max(robot_motion(T_pred_last.Inverse()),
                                       params_.odometry_override_step_ratio * velocity_.LongestRecentStep());
@@ -552,6 +555,10 @@ struct ShapeSlam::Registration {
   std::vector<VisiblePolyline> visible;
   bool model_empty = true;  // nothing to register against yet (the first scan)
   bool guessed = false;     // placed by the motion model alone (SubmapParams::restart_when_lost)
+  // Without odometry and without a trusted match: the best candidate lies within
+  // SubmapParams::restart_follow_* of the constant-velocity prediction (the scan fits poorly but
+  // where the robot's motion puts it).
+  bool follows_motion = false;
 };
 
 // One scan through the pipeline: extract (§3.1) -> predict -> register (§3, §4.2-§4.3, §5.1)
@@ -600,7 +607,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   // (SubmapParams::restart_when_lost): the next scans are tracked against what it saw, and only
   // its guessed step to the previous keyframe is left for loop closure to correct.
   registration.guessed = UseSubmaps() && params_.submaps.restart_when_lost && !loc.trusted &&
-                         !loc.follows_motion && !registration.model_empty &&
+                         !registration.follows_motion && !registration.model_empty &&
                          !report.used_odometry;
   const bool may_update = loc.trusted || registration.model_empty || registration.guessed ||
                           loc.coverage < params_.max_untrusted_coverage;
@@ -639,11 +646,15 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
   if (report.keyframe_tracked || r.model_empty || shapes.coarse.empty()) return r;
   std::optional<Pose2> velocity_hint;
   if (prediction.T_pred_robot_velocity) {
-    velocity_hint =
-        scan.T_robot_sensor.Inverse() * *prediction.T_pred_robot_velocity * scan.T_robot_sensor;
+    velocity_hint = MotionInFrame(*prediction.T_pred_robot_velocity, scan.T_robot_sensor);
   }
   r.loc = LocalizeAt(shapes, scan, T_map_sensor_pred, prediction.odometry_delta, velocity_hint,
                      std::move(recent_fine), r.visible);
+  if (!prediction.odometry_delta && velocity_hint && r.loc.best_untrusted) {
+    r.follows_motion = PosesWithin(*r.loc.best_untrusted, *velocity_hint,
+                                   params_.submaps.restart_follow_m,
+                                   params_.submaps.restart_follow_rad);
+  }
   if (prediction.odometry_delta && !r.loc.fast_track && last_T_map_robot_ &&
       r.loc.inlier_ratio < params_.odometry_check_fit) {
     CheckOdometry(shapes, scan, T_map_sensor_pred, *last_T_map_robot_ * scan.T_robot_sensor, r.loc,
@@ -687,7 +698,9 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   std::vector<VisiblePolyline>& visible = registration.visible;
   std::vector<Polyline> perceived_map;
   for (const Polyline& p : shapes.fine) perceived_map.push_back(Transform(T_map_sensor, p));
-  if (report.keyframe_tracked) {
+  if (registration.guessed) {
+    visible.clear();  // inserted into new submaps only (InsertIntoSubmaps)
+  } else if (report.keyframe_tracked) {
     visible = TrackingMap().Visible(
         T_map_sensor, internal::ModelVisibility(scan, /*no_estimate=*/false, params_));
   } else {
@@ -695,9 +708,11 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
     for (VisiblePolyline& v : visible) v.points_sensor = Transform(correction_inverse, v.points_sensor);
   }
   const bool trusted = loc.trusted || registration.model_empty;
+  const Placement placement = trusted                ? Placement::kMatched
+                              : registration.guessed ? Placement::kGuessed
+                                                     : Placement::kUnconfirmed;
   if (UseSubmaps()) {
-    report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, trusted,
-                                          registration.guessed);
+    report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, placement);
   } else {
     report.map_update =
         UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
@@ -705,8 +720,8 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   }
   report.keyframe = true;
   const Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
-  AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), T_track_robot, trusted,
-              registration.guessed, loc.covariance);
+  AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine), T_track_robot, placement,
+              loc.covariance);
   CheckpointMap(static_cast<int>(keyframes_.size()));
   if (!loop_closer_.Update(places_, graph_)) return T_track_robot;
   OptimizeAndRebuild(/*at_end=*/false);

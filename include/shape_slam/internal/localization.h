@@ -38,10 +38,9 @@ struct Localization {
   /// Fraction of the scan within new_territory_distance_m of the model; computed only for a scan
   /// without a trusted match (0 otherwise), the only case that reads it.
   double coverage = 0.0;
-  /// Without odometry and without a trusted match: the best candidate the refinement reached
-  /// lies within SubmapParams::restart_follow_* of the constant-velocity prediction (the scan
-  /// fits poorly but where the robot's motion puts it; SubmapParams::restart_when_lost).
-  bool follows_motion = false;
+  /// Without a trusted match: the correction of the best candidate a refinement reached, before
+  /// `correction` falls back to the prediction (none converged: empty).
+  std::optional<Pose2> best_untrusted;
   bool fast_track = false;  ///< taken from the prediction without shape matching
   bool odometry_overridden = false;  ///< matched without the odometry, which it contradicts
 };
