@@ -101,6 +101,21 @@ struct LocalizerParams {
   /// behind it. Without odometry the prediction is too loose to tell (aces copy 1, own map, no
   /// odometry: 92.3 -> 52.3 % within 0.10 m), so it is left out there.
   double see_through_margin_m = 1.0;
+  /// Off the map: while tracking, a scan whose tracked pose scores below off_map_fit in the
+  /// global search's likelihood field (the map alone; the recent scan carries the tracking
+  /// through places the map does not hold, and a drifted pose) runs the global search every
+  /// off_map_search_every such scans. Its best verified pose, matched at min_global_fit,
+  /// scoring off_map_margin more than the tracked pose in the field, with no other distinct
+  /// pose explaining within ambiguous_margin_samples as many samples, is tracked beside the
+  /// pose, and replaces it once it has stayed matched and that much better for
+  /// off_map_confirm_scans more scans (0: at once). off_map_fit 0: off. On the development
+  /// logs (bench/localize) it found the robot again after rooms the map does not hold, in the
+  /// other half's map and after a kidnapping, and changed nothing in the own map with odometry
+  /// (docs/notebook.md, 2026-12-05).
+  double off_map_fit = 0.25;
+  int off_map_search_every = 10;
+  double off_map_margin = 0.2;
+  int off_map_confirm_scans = 3;
 
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;
@@ -184,6 +199,11 @@ class Localizer {
                          const std::optional<Pose2>& odometry_delta);
   LocalizerReport TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                             const std::optional<Pose2>& odometry_delta);
+  std::vector<Point2> GlobalSamples(const ScanShapes& shapes) const;
+  bool OffMap(const ScanShapes& shapes, const LaserScan& scan,
+              const std::optional<Pose2>& odometry_delta, Verified& v);
+  std::optional<Verified> SearchOffMap(const ScanShapes& shapes, const LaserScan& scan,
+                                       const Pose2& T_map_robot_tracked);
   static void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed);
   std::optional<Pose2> OdometryDelta(const LaserScan& scan);
 
@@ -196,6 +216,9 @@ class Localizer {
   LocalizerStatus status_ = LocalizerStatus::kSearching;
   bool was_localized_ = false;
   int drop_scans_ = 0;   // tracking: consecutive scans with a dropped fit
+  int off_map_scans_ = 0;  // tracking: consecutive scans the map alone explains poorly
+  std::optional<Hypothesis> challenger_;  // off the map: a pose the map explains better
+  int challenger_scans_ = 0;              // scans it has stayed so
   double fit_mean_ = 0.0;
   std::optional<Pose2> last_T_odom_robot_;
   std::optional<Pose2> first_T_odom_robot_;

@@ -111,6 +111,12 @@ void LocalizerParams::Validate() const {
   InRange(fit_mean_weight, 1e-6, 1.0, "LocalizerParams::fit_mean_weight");
   InRange(retry_depth_tolerance_m, 0.0, 100.0, "LocalizerParams::retry_depth_tolerance_m");
   InRange(see_through_margin_m, 0.0, 100.0, "LocalizerParams::see_through_margin_m");
+  InRange(off_map_fit, 0.0, 1.0, "LocalizerParams::off_map_fit");
+  AtLeastOne(off_map_search_every, "LocalizerParams::off_map_search_every");
+  if (off_map_confirm_scans < 0) {
+    throw std::invalid_argument("LocalizerParams::off_map_confirm_scans must be >= 0");
+  }
+  InRange(off_map_margin, 0.0, 1.0, "LocalizerParams::off_map_margin");
 }
 
 const char* ToString(LocalizerStatus status) {
@@ -135,6 +141,7 @@ void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   status_ = LocalizerStatus::kTracking;
   was_localized_ = true;
   drop_scans_ = 0;
+  challenger_.reset();
   fit_mean_ = -1.0;  // set by the first match
 }
 
@@ -194,18 +201,22 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   return verified;
 }
 
+// The scan's samples for the global search's field (sensor frame, window_search_spacing_m).
+std::vector<Point2> Localizer::GlobalSamples(const ScanShapes& shapes) const {
+  const ShapeSlamParams& p = params_.stages;
+  const double spacing = p.matcher.alignment.sample_spacing_m;
+  return internal::Thinned(internal::AlignmentSamples(shapes.fine, spacing), spacing,
+                           p.window_search_spacing_m);
+}
+
 // The branch and bound over the whole map (all turns): its best distinct robot poses, best fit
 // first. Its params (GlobalSearchParams) have no motion prior, so score is fit, and the
 // localizer's distinct_m, distinct_rad and global_hypotheses, so the poses are already the
 // distinct few to verify.
 std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
                                                const LaserScan& scan) const {
-  const ShapeSlamParams& p = params_.stages;
-  const double spacing = p.matcher.alignment.sample_spacing_m;
-  const std::vector<Point2> samples = internal::Thinned(
-      internal::AlignmentSamples(shapes.fine, spacing), spacing, p.window_search_spacing_m);
   std::vector<Pose2> candidates;  // robot poses
-  for (const WindowHypothesis& h : global_search_.SearchMap(samples)) {
+  for (const WindowHypothesis& h : global_search_.SearchMap(GlobalSamples(shapes))) {
     candidates.push_back(h.T_model_scan * scan.T_robot_sensor.Inverse());
   }
   return candidates;
@@ -338,14 +349,89 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   if (h.misses >= params_.lost_after_scans || drop_scans_ >= params_.fit_drop_scans) {
     h.tracked = true;  // kept: see "lost" in localizer.h
     recent_.reset();
+    challenger_.reset();
     report.status = status_ = LocalizerStatus::kLost;
     report.lost_event = true;
     return report;
+  }
+  if (params_.off_map_fit > 0.0 && OffMap(shapes, scan, odometry_delta, v)) {
+    report.T_map_robot = v.T_map_robot;
+    report.inlier_ratio = v.fit;
+    report.matched = report.recovered_event = true;
   }
   if (v.trusted && !dropped) KeepRecent(shapes, scan, v.T_map_robot);
   report.status = LocalizerStatus::kTracking;
   report.localized = true;
   return report;
+}
+
+// Off the map (LocalizerParams::off_map_fit): while the map explains the tracked pose poorly,
+// the global search runs every off_map_search_every scans; a pose it finds that the map
+// explains off_map_margin better becomes the challenger, tracked beside the pose; once it has
+// stayed matched and that much better for off_map_confirm_scans scans it replaces the tracked
+// pose (`v`; true). A look-alike corridor fits one scan; rarely the next few as well.
+bool Localizer::OffMap(const ScanShapes& shapes, const LaserScan& scan,
+                       const std::optional<Pose2>& odometry_delta, Verified& v) {
+  const std::vector<Point2> samples = GlobalSamples(shapes);
+  const auto map_fit = [&](const Pose2& T_map_robot) {
+    return global_search_.Fit(samples, T_map_robot * scan.T_robot_sensor);
+  };
+  const double tracked_fit = map_fit(v.T_map_robot);
+  off_map_scans_ = tracked_fit < params_.off_map_fit ? off_map_scans_ + 1 : 0;
+  if (challenger_) {
+    const Verified c =
+        Track(shapes, scan, *challenger_, odometry_delta, 0, params_.min_global_fit, TrackingAids{});
+    Motion(*challenger_, c.T_map_robot, c.trusted);
+    if (!c.trusted || map_fit(c.T_map_robot) < tracked_fit + params_.off_map_margin) {
+      challenger_.reset();
+      return false;
+    }
+    if (++challenger_scans_ < params_.off_map_confirm_scans) return false;
+    v = c;
+  } else {
+    if (off_map_scans_ == 0 || off_map_scans_ % params_.off_map_search_every != 0) return false;
+    const std::optional<Verified> found = SearchOffMap(shapes, scan, v.T_map_robot);
+    if (!found || map_fit(found->T_map_robot) < tracked_fit + params_.off_map_margin) return false;
+    challenger_.emplace(found->T_map_robot, found->explained, found->fit, params_.stages.motion_model);
+    challenger_scans_ = 0;
+    if (params_.off_map_confirm_scans > 0) return false;
+    v = *found;
+  }
+  Hypothesis& h = hypotheses_.front();
+  h = std::move(*challenger_);
+  h.fit = v.fit;
+  challenger_.reset();
+  recent_.reset();
+  fit_mean_ = v.fit;
+  drop_scans_ = off_map_scans_ = 0;
+  return true;
+}
+
+// The global search's poses, each verified against
+// the map alone; the best, when it fits min_global_fit, lies apart from the tracked pose and no
+// distinct rival explains nearly as many samples.
+std::optional<Localizer::Verified> Localizer::SearchOffMap(const ScanShapes& shapes,
+                                                           const LaserScan& scan,
+                                                           const Pose2& T_map_robot_tracked) {
+  std::vector<Verified> found;
+  for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
+    const Hypothesis probe(candidate, 0.0, 0.0, params_.stages.motion_model);
+    const Verified v =
+        Track(shapes, scan, probe, Pose2(), 0, params_.min_global_fit, TrackingAids{});
+    if (v.trusted) found.push_back(v);
+  }
+  if (found.empty()) return std::nullopt;
+  std::stable_sort(found.begin(), found.end(),
+                   [](const Verified& a, const Verified& b) { return a.explained > b.explained; });
+  const Verified& best = found.front();
+  if (Near(best.T_map_robot, T_map_robot_tracked, params_)) return std::nullopt;
+  for (std::size_t i = 1; i < found.size(); ++i) {
+    if (!Near(found[i].T_map_robot, best.T_map_robot, params_) &&
+        found[i].explained >= best.explained - params_.ambiguous_margin_samples) {
+      return std::nullopt;  // a look-alike place: stay
+    }
+  }
+  return best;
 }
 
 // A matched scan becomes the recent scan when there is none or the robot moved a keyframe's

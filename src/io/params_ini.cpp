@@ -251,6 +251,10 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "fit_mean_weight", "... the running mean weighting each scan by this", &p.fit_mean_weight},
       {"localizer", "retry_depth_tolerance_m", "while tracking with odometry, a scan without a match is matched again with the visibility's occlusion tolerance widened to this (m; 0: off)", &p.retry_depth_tolerance_m},
       {"localizer", "see_through_margin_m", "while tracking with odometry, map parts nearer than the scan's beam of the same bearing by more than this are left out: the beam went past them (m; 0: off)", &p.see_through_margin_m},
+      {"localizer", "off_map_fit", "while tracking, a pose scoring below this in the global search's likelihood field (the map alone) is off the map: the global search runs ... (0: off)", &p.off_map_fit},
+      {"localizer", "off_map_search_every", "... every this many such scans, and its best pose replaces the tracked one ...", &p.off_map_search_every},
+      {"localizer", "off_map_margin", "... when it is matched at min_global_fit, scores this much more in the global search's field and no rival comes near ...", &p.off_map_margin},
+      {"localizer", "off_map_confirm_scans", "... and has stayed so for this many more scans, tracked beside the pose", &p.off_map_confirm_scans},
   };
 }
 

@@ -127,27 +127,34 @@ TEST(LocalizerTest, FindsTheRobotWithoutAnInitialPoseWithinFiveScans) {
   }
 }
 
-TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
-  // 30 scans from the first corner, then the robot is carried to the opposite side of the
-  // block; its odometry does not know (it continues smoothly from the last pose).
-  const SimRun before = Simulate(0, 30, 3);
-  const SimRun after = Simulate(2, 50, 4);
-  std::vector<LaserScan> scans = before.scans;
-  std::vector<Pose2> truth = before.truth;
+// 30 scans from the first corner, then the robot is carried to the opposite side of the block
+// for `after` scans; its odometry does not know (it continues smoothly from the last pose).
+constexpr std::size_t kBeforeKidnapping = 30;
+SimRun Kidnapped(int after_scans) {
+  const SimRun before = Simulate(0, kBeforeKidnapping, 3);
+  const SimRun after = Simulate(2, after_scans, 4);
+  SimRun run = before;
   const Pose2 T_odom_join = *before.scans.back().T_odom_robot * after.scans.front().T_odom_robot->Inverse();
   for (std::size_t i = 0; i < after.scans.size(); ++i) {
     LaserScan scan = after.scans[i];
     scan.timestamp_s = before.scans.back().timestamp_s + 0.1 * static_cast<double>(i + 1);
     scan.T_odom_robot = T_odom_join * *scan.T_odom_robot;
-    scans.push_back(scan);
-    truth.push_back(after.truth[i]);
+    run.scans.push_back(scan);
+    run.truth.push_back(after.truth[i]);
   }
+  return run;
+}
+
+TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
+  const SimRun run = Kidnapped(50);
+  const std::vector<LaserScan>& scans = run.scans;
+  const std::vector<Pose2>& truth = run.truth;
   Localizer localizer(SceneMap(testing::LoopWorld()));
   localizer.SetInitialPose(truth[0]);
   int lost_at = -1, recovered_at = -1;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const LocalizerReport report = localizer.Process(scans[i]);
-    if (i < before.scans.size()) {
+    if (i < kBeforeKidnapping) {
       EXPECT_TRUE(report.localized) << "scan " << i;
       EXPECT_FALSE(report.lost_event) << "scan " << i;
     }
@@ -157,11 +164,47 @@ TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
       EXPECT_THAT(report.T_map_robot, IsNearly(truth[i], 0.1, 0.05)) << "scan " << i;
     }
   }
-  const int kidnap = static_cast<int>(before.scans.size());
+  const int kidnap = static_cast<int>(kBeforeKidnapping);
   EXPECT_GE(lost_at, kidnap);
   EXPECT_LT(lost_at, kidnap + 5);
   EXPECT_GT(recovered_at, lost_at);
   EXPECT_LT(recovered_at, lost_at + 10);
+}
+
+// The kidnapping above, with the loss detection off (as where the last matched scan carries the
+// tracking through a place the map does not hold): the tracked pose goes on by the odometry where
+// the map explains little of the scans. The off-map search (off_map_fit) finds the robot again
+// and, once its pose has stayed better for off_map_confirm_scans scans, tracks from there;
+// without it the robot is never found.
+int ScansUntilFoundAfterAKidnapping(const LocalizerParams& params) {
+  const SimRun run = Kidnapped(60);
+  Localizer localizer(SceneMap(testing::LoopWorld()), params);
+  localizer.SetInitialPose(run.truth[0]);
+  int found_at = -1;
+  for (std::size_t i = 0; i < run.scans.size(); ++i) {
+    const LocalizerReport report = localizer.Process(run.scans[i]);
+    EXPECT_FALSE(report.lost_event) << "scan " << i;
+    const bool right =
+        report.localized && PosesWithin(report.T_map_robot, run.truth[i], 0.1, 0.05);
+    if (i >= kBeforeKidnapping && right && found_at < 0) found_at = static_cast<int>(i);
+    if (found_at >= 0) EXPECT_TRUE(right) << "scan " << i;
+  }
+  return found_at < 0 ? -1 : found_at - static_cast<int>(kBeforeKidnapping);
+}
+
+TEST(LocalizerTest, TheOffMapSearchFindsTheRobotWhereTheTrackedPoseLostTheMap) {
+  LocalizerParams with;
+  with.lost_after_scans = 1000;  // never lost: the tracked pose goes on
+  with.fit_drop_ratio = 0.0;
+  with.off_map_fit = 0.6;  // the loop world is nearly symmetric: the wrong side fits in part
+  with.off_map_search_every = 5;
+  with.off_map_confirm_scans = 3;
+  LocalizerParams without = with;
+  without.off_map_fit = 0.0;
+  const int found = ScansUntilFoundAfterAKidnapping(with);
+  EXPECT_GE(found, 0);
+  EXPECT_LE(found, 20);
+  EXPECT_EQ(ScansUntilFoundAfterAKidnapping(without), -1);
 }
 
 TEST(LocalizerTest, KeepsItsPoseThroughABlackoutAndWinsAtOnceAfterIt) {
