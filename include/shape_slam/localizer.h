@@ -200,8 +200,8 @@ class Localizer {
   LocalizerReport TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                             const std::optional<Pose2>& odometry_delta);
   std::vector<Point2> GlobalSamples(const ScanShapes& shapes) const;
-  bool OffMap(const ScanShapes& shapes, const LaserScan& scan,
-              const std::optional<Pose2>& odometry_delta, Verified& v);
+  bool RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
+                        const std::optional<Pose2>& odometry_delta, Verified& v);
   std::optional<Verified> SearchOffMap(const ScanShapes& shapes, const LaserScan& scan,
                                        const Pose2& T_map_robot_tracked);
   static void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed);

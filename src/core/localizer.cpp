@@ -354,7 +354,7 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
     report.lost_event = true;
     return report;
   }
-  if (params_.off_map_fit > 0.0 && OffMap(shapes, scan, odometry_delta, v)) {
+  if (params_.off_map_fit > 0.0 && RelocalizeOffMap(shapes, scan, odometry_delta, v)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
     report.matched = report.recovered_event = true;
@@ -370,8 +370,8 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
 // explains off_map_margin better becomes the challenger, tracked beside the pose; once it has
 // stayed matched and that much better for off_map_confirm_scans scans it replaces the tracked
 // pose (`v`; true). A look-alike corridor fits one scan; rarely the next few as well.
-bool Localizer::OffMap(const ScanShapes& shapes, const LaserScan& scan,
-                       const std::optional<Pose2>& odometry_delta, Verified& v) {
+bool Localizer::RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
+                                 const std::optional<Pose2>& odometry_delta, Verified& v) {
   const std::vector<Point2> samples = GlobalSamples(shapes);
   const auto map_fit = [&](const Pose2& T_map_robot) {
     return global_search_.Fit(samples, T_map_robot * scan.T_robot_sensor);
@@ -379,8 +379,8 @@ bool Localizer::OffMap(const ScanShapes& shapes, const LaserScan& scan,
   const double tracked_fit = map_fit(v.T_map_robot);
   off_map_scans_ = tracked_fit < params_.off_map_fit ? off_map_scans_ + 1 : 0;
   if (challenger_) {
-    const Verified c =
-        Track(shapes, scan, *challenger_, odometry_delta, 0, params_.min_global_fit, TrackingAids{});
+    const Verified c = Track(shapes, scan, *challenger_, odometry_delta, 0,
+                             params_.min_global_fit, TrackingAids{});
     Motion(*challenger_, c.T_map_robot, c.trusted);
     if (!c.trusted || map_fit(c.T_map_robot) < tracked_fit + params_.off_map_margin) {
       challenger_.reset();
@@ -392,7 +392,8 @@ bool Localizer::OffMap(const ScanShapes& shapes, const LaserScan& scan,
     if (off_map_scans_ == 0 || off_map_scans_ % params_.off_map_search_every != 0) return false;
     const std::optional<Verified> found = SearchOffMap(shapes, scan, v.T_map_robot);
     if (!found || map_fit(found->T_map_robot) < tracked_fit + params_.off_map_margin) return false;
-    challenger_.emplace(found->T_map_robot, found->explained, found->fit, params_.stages.motion_model);
+    challenger_.emplace(found->T_map_robot, found->explained, found->fit,
+                        params_.stages.motion_model);
     challenger_scans_ = 0;
     if (params_.off_map_confirm_scans > 0) return false;
     v = *found;
@@ -407,9 +408,9 @@ bool Localizer::OffMap(const ScanShapes& shapes, const LaserScan& scan,
   return true;
 }
 
-// The global search's poses, each verified against
-// the map alone; the best, when it fits min_global_fit, lies apart from the tracked pose and no
-// distinct rival explains nearly as many samples.
+// The global search's poses, each verified against the map alone; the best, when it is matched
+// at min_global_fit, lies apart from the tracked pose and no distinct rival explains nearly as
+// many samples.
 std::optional<Localizer::Verified> Localizer::SearchOffMap(const ScanShapes& shapes,
                                                            const LaserScan& scan,
                                                            const Pose2& T_map_robot_tracked) {
