@@ -187,7 +187,9 @@ int ScansUntilFoundAfterAKidnapping(const LocalizerParams& params) {
     const bool right =
         report.localized && PosesWithin(report.T_map_robot, run.truth[i], 0.1, 0.05);
     if (i >= kBeforeKidnapping && right && found_at < 0) found_at = static_cast<int>(i);
-    if (found_at >= 0) EXPECT_TRUE(right) << "scan " << i;
+    if (found_at >= 0) {
+      EXPECT_TRUE(right) << "scan " << i;
+    }
   }
   return found_at < 0 ? -1 : found_at - static_cast<int>(kBeforeKidnapping);
 }
