@@ -190,7 +190,9 @@ class Localizer {
                  const TrackingAids& aids) const;
   void KeepRecent(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot);
   double TrackingMinFit() const;
-  std::vector<Pose2> GlobalCandidates(const ScanShapes& shapes, const LaserScan& scan) const;
+  std::vector<Verified> VerifiedGlobalPoses(const ScanShapes& shapes, const LaserScan& scan,
+                                            const std::vector<Point2>& samples,
+                                            double min_fit) const;
   void PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
                            const std::optional<Pose2>& odometry_delta);
   void AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan);
@@ -203,7 +205,8 @@ class Localizer {
   bool RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
                         const std::optional<Pose2>& odometry_delta, Verified& v);
   std::optional<Verified> SearchOffMap(const ScanShapes& shapes, const LaserScan& scan,
-                                       const Pose2& T_map_robot_tracked);
+                                       const std::vector<Point2>& samples,
+                                       const Pose2& T_map_robot_tracked) const;
   static void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed);
   std::optional<Pose2> OdometryDelta(const LaserScan& scan);
 

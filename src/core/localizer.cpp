@@ -209,17 +209,23 @@ std::vector<Point2> Localizer::GlobalSamples(const ScanShapes& shapes) const {
                            p.window_search_spacing_m);
 }
 
-// The branch and bound over the whole map (all turns): its best distinct robot poses, best fit
-// first. Its params (GlobalSearchParams) have no motion prior, so score is fit, and the
-// localizer's distinct_m, distinct_rad and global_hypotheses, so the poses are already the
-// distinct few to verify.
-std::vector<Pose2> Localizer::GlobalCandidates(const ScanShapes& shapes,
-                                               const LaserScan& scan) const {
-  std::vector<Pose2> candidates;  // robot poses
-  for (const WindowHypothesis& h : global_search_.SearchMap(GlobalSamples(shapes))) {
-    candidates.push_back(h.T_model_scan * scan.T_robot_sensor.Inverse());
+// The branch and bound over the whole map (all turns) for `samples` (GlobalSamples): its best
+// distinct robot poses, best fit first, each verified by the localization with it as a tight
+// prediction; the ones matched at min_fit, in that order. Its params (GlobalSearchParams) have
+// no motion prior, so score is fit, and the localizer's distinct_m, distinct_rad and
+// global_hypotheses, so the poses are already the distinct few to verify.
+std::vector<Localizer::Verified> Localizer::VerifiedGlobalPoses(const ScanShapes& shapes,
+                                                                const LaserScan& scan,
+                                                                const std::vector<Point2>& samples,
+                                                                double min_fit) const {
+  std::vector<Verified> verified;
+  for (const WindowHypothesis& h : global_search_.SearchMap(samples)) {
+    const Hypothesis probe(h.T_model_scan * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
+                           params_.stages.motion_model);
+    const Verified v = Track(shapes, scan, probe, Pose2(), 0, min_fit, TrackingAids{});
+    if (v.trusted) verified.push_back(v);
   }
-  return candidates;
+  return verified;
 }
 
 void Localizer::Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed) {
@@ -247,11 +253,8 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
 // The global search's poses, each verified by the localization with it as a tight prediction;
 // the trusted ones not already kept become new hypotheses.
 void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan) {
-  for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
-    const Hypothesis probe(candidate, 0.0, 0.0, params_.stages.motion_model);
-    const Verified v =
-        Track(shapes, scan, probe, Pose2(), 0, params_.min_inlier_ratio, TrackingAids{});
-    if (!v.trusted) continue;
+  for (const Verified& v :
+       VerifiedGlobalPoses(shapes, scan, GlobalSamples(shapes), params_.min_inlier_ratio)) {
     const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
       return Near(h.T_map_robot, v.T_map_robot, params_);
     });
@@ -390,7 +393,7 @@ bool Localizer::RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan
     v = c;
   } else {
     if (off_map_scans_ == 0 || off_map_scans_ % params_.off_map_search_every != 0) return false;
-    const std::optional<Verified> found = SearchOffMap(shapes, scan, v.T_map_robot);
+    const std::optional<Verified> found = SearchOffMap(shapes, scan, samples, v.T_map_robot);
     if (!found || map_fit(found->T_map_robot) < tracked_fit + params_.off_map_margin) return false;
     challenger_.emplace(found->T_map_robot, found->explained, found->fit,
                         params_.stages.motion_model);
@@ -413,14 +416,10 @@ bool Localizer::RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan
 // many samples.
 std::optional<Localizer::Verified> Localizer::SearchOffMap(const ScanShapes& shapes,
                                                            const LaserScan& scan,
-                                                           const Pose2& T_map_robot_tracked) {
-  std::vector<Verified> found;
-  for (const Pose2& candidate : GlobalCandidates(shapes, scan)) {
-    const Hypothesis probe(candidate, 0.0, 0.0, params_.stages.motion_model);
-    const Verified v =
-        Track(shapes, scan, probe, Pose2(), 0, params_.min_global_fit, TrackingAids{});
-    if (v.trusted) found.push_back(v);
-  }
+                                                           const std::vector<Point2>& samples,
+                                                           const Pose2& T_map_robot_tracked) const {
+  std::vector<Verified> found =
+      VerifiedGlobalPoses(shapes, scan, samples, params_.min_global_fit);
   if (found.empty()) return std::nullopt;
   std::stable_sort(found.begin(), found.end(),
                    [](const Verified& a, const Verified& b) { return a.explained > b.explained; });

@@ -235,12 +235,14 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
   for (std::size_t i = 0; i < active_submaps_.size(); ++i) {
     Submap& submap = active_submaps_[i];
     const bool front = i == 0;
-    std::vector<VisiblePolyline> visible;  // none in a new submap
-    if (front && !restart) {
-      visible = visible_front;
-    } else if (!submap.map.Empty()) {
-      visible = submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
+    // Nothing is visible in a new submap (after a restart the front one too); the front one's
+    // visible shape is the registration's.
+    std::vector<VisiblePolyline> computed;
+    if (!submap.map.Empty() && !front) {
+      computed = submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
     }
+    const std::vector<VisiblePolyline>& visible =
+        submap.map.Empty() ? computed : front ? visible_front : computed;
     const bool trusted = placement == Placement::kMatched || submap.map.Empty();
     MapUpdateStats stats =
         UpdateMap(submap.map, perceived, T_local_sensor, visible, scan, trusted, params_.map_update);
