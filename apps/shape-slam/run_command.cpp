@@ -359,7 +359,9 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("scans_with_odometry").Value(odometry.scans_with_odometry);
   json.Key("scans_predicted").Value(odometry.scans_predicted);
   json.Key("noise_scale_xy").Value(odometry.noise_scale_xy);
-  json.Key("noise_scale_theta").Value(odometry.noise_scale_theta).EndObject();
+  json.Key("noise_scale_theta").Value(odometry.noise_scale_theta);
+  json.Key("heading_per_m").Value(odometry.heading_per_m);
+  json.Key("heading_per_rad").Value(odometry.heading_per_rad).EndObject();
   json.Key("map").BeginObject();
   json.Key("polylines").Value(map.NumPolylines()).Key("vertices").Value(map.NumVertices());
   json.Key("bytes").Value(map_file_bytes).Key("memory_bytes").Value(map.GeometryBytes());

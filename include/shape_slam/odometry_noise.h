@@ -42,6 +42,45 @@ struct OdometryNoiseParams {
   void Validate() const;
 };
 
+/// The odometry's systematic heading error, learned from the log (not in the paper). A wheel-base
+/// error turns every increment by a share of its turn, unequal wheel radii by an angle per metre
+/// travelled; either bends a whole trajectory. The trusted registrations' heading corrections
+/// of the odometry's predictions measure both, and the next increments are corrected by them.
+struct OdometryCalibrationParams {
+  bool enabled = true;    ///< read by the submap design (the global one keeps raw increments)
+  int window = 300;       ///< the last this many registrations count
+  int min_samples = 30;   ///< no correction before this many are in
+  /// A coefficient t of its standard errors from zero is applied shrunk by (1 - (min_t/t)^2),
+  /// not at all within min_t: a log with good odometry, or with large random errors, keeps its
+  /// increments as they are.
+  double min_t = 4.0;
+  double max_per_m = 0.1;    ///< radians per metre travelled, at most (either sign)
+  double max_per_rad = 0.2;  ///< radians per radian turned, at most (either sign)
+  void Validate() const;
+};
+
+/// Learns the heading error model e = per_rad * turn + per_m * distance of the raw odometry
+/// increments by robust least squares (Huber weights, scale from the median absolute residual)
+/// over the last `window` samples, and corrects the increments by it.
+class OdometryCalibrator {
+ public:
+  explicit OdometryCalibrator(const OdometryCalibrationParams& params);
+  /// The raw increment T_prev_cur with the learned heading error added.
+  Pose2 Correct(const Pose2& odometry_delta) const;
+  /// One registration: the raw increment, and the heading the robot turned beyond it (the
+  /// scan's own correction plus what Correct added).
+  void Add(const Pose2& odometry_delta, double heading_error_rad);
+  double HeadingPerMetre() const { return per_m_; }
+  double HeadingPerRadian() const { return per_rad_; }
+
+ private:
+  void Fit();
+  OdometryCalibrationParams params_;
+  std::vector<Eigen::Vector3d> samples_;  // ring buffer of (distance, turn, heading error)
+  int next_ = 0;
+  double per_m_ = 0.0, per_rad_ = 0.0;
+};
+
 /// Covariance of an odometry increment T_prev_cur (x, y, theta) under the noise model.
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise);
 

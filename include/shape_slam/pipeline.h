@@ -103,6 +103,7 @@ struct ShapeSlamParams {
   SubmapParams submaps;
   LoopClosureParams loop_closure;   ///< loop_closure.h
   OdometryNoiseParams odometry_noise;
+  OdometryCalibrationParams odometry_calibration;
   /// Also match each scan against the last keyframe scan's polylines (besides the visible map):
   /// a fresh, undistorted view of the same place that keeps tracking robust where the map is
   /// still thin or imperfect. Not in the paper, which matches against the map alone.
@@ -226,6 +227,9 @@ struct OdometryReport {
   /// (OdometryNoiseParams::learn; 1 until learned).
   double noise_scale_xy = 1.0;
   double noise_scale_theta = 1.0;
+  /// The learned heading error of the raw increments (OdometryCalibrator; 0 until learned).
+  double heading_per_m = 0.0;
+  double heading_per_rad = 0.0;
 };
 
 /// A short name for the status: "disabled", "absent", "constant", "used".
@@ -334,7 +338,8 @@ class ShapeSlam {
   struct Prediction {
     Pose2 T_map_robot;
     std::optional<Pose2> T_pred_robot_velocity;  // constant-velocity hint (no odometry)
-    std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry
+    std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry, calibrated
+    std::optional<Pose2> raw_odometry_delta;      // ... as the log gives it
   };
   struct Keyframe {
     LaserScan scan;                      // counter-clockwise beams
@@ -386,6 +391,7 @@ class ShapeSlam {
                         const Prediction& prediction, const Pose2& T_map_sensor_pred,
                         ScanReport& report) const;
   void UpdateMotion(const Pose2& T_track_robot, bool reset_lost);
+  void LearnOdometry(const Prediction& prediction, const internal::Localization& loc);
   void LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction);
   Pose2 UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                           Registration& registration, ScanReport& report);
@@ -434,6 +440,7 @@ class ShapeSlam {
   std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
+  OdometryCalibrator odometry_calibrator_;  // the log's odometry heading error
   ShapeSlamParams tracking_params_;      // params_ with the learned odometry noise
   ConstantVelocity velocity_;            // the last motions: the prediction without odometry
   double travel_m_ = 0.0;

@@ -2,6 +2,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -106,6 +107,80 @@ void OdometryNoiseLearner::Add(const Pose2& odometry_delta, const Pose2& correct
   current_.sigma_theta_rad *= scale_theta_;
   current_.sigma_theta_per_rad *= scale_theta_;
   current_.sigma_theta_per_m *= scale_theta_;
+}
+
+void OdometryCalibrationParams::Validate() const {
+  if (window < 1 || min_samples < 2 || min_samples > window) {
+    throw std::invalid_argument(
+        "OdometryCalibrationParams::window must be >= 1, min_samples in [2, window]");
+  }
+  internal::NonNegative(min_t, "OdometryCalibrationParams::min_t");
+  internal::NonNegative(max_per_m, "OdometryCalibrationParams::max_per_m");
+  internal::NonNegative(max_per_rad, "OdometryCalibrationParams::max_per_rad");
+}
+
+OdometryCalibrator::OdometryCalibrator(const OdometryCalibrationParams& params)
+    : params_(params) {}
+
+Pose2 OdometryCalibrator::Correct(const Pose2& odometry_delta) const {
+  const double error =
+      per_rad_ * odometry_delta.theta + per_m_ * odometry_delta.Translation().norm();
+  return Pose2(odometry_delta.x, odometry_delta.y, odometry_delta.theta + error);
+}
+
+void OdometryCalibrator::Add(const Pose2& odometry_delta, double heading_error_rad) {
+  if (!params_.enabled || !std::isfinite(heading_error_rad)) return;
+  const Eigen::Vector3d sample(odometry_delta.Translation().norm(), odometry_delta.theta,
+                               heading_error_rad);
+  if (static_cast<int>(samples_.size()) < params_.window) {
+    samples_.push_back(sample);
+  } else {
+    samples_[next_] = sample;
+    next_ = (next_ + 1) % params_.window;
+  }
+  if (static_cast<int>(samples_.size()) >= params_.min_samples) Fit();
+}
+
+// Iteratively reweighted least squares with Huber weights (k = 1.345 robust standard
+// deviations): a glitch or a wrong match among the samples moves the fit little. A coefficient
+// counts only when it stands min_t standard errors from zero (a regressor the log never
+// exercises, such as turns for a robot that only drives straight, has a huge one).
+void OdometryCalibrator::Fit() {
+  constexpr double kHuber = 1.345;
+  constexpr double kRidge = 1e-9;  // keeps the normal matrix invertible
+  Eigen::Vector2d coef = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d normal = Eigen::Matrix2d::Identity();
+  double scale = 0.0;
+  std::vector<double> residuals(samples_.size());
+  for (int iteration = 0; iteration < 5; ++iteration) {
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      const Eigen::Vector3d& s = samples_[i];
+      residuals[i] = std::abs(s.z() - coef.x() * s.x() - coef.y() * s.y());
+    }
+    scale = std::max(1.4826 * Median(residuals), 1e-6);
+    normal = kRidge * Eigen::Matrix2d::Identity();
+    Eigen::Vector2d rhs = Eigen::Vector2d::Zero();
+    for (std::size_t i = 0; i < samples_.size(); ++i) {
+      const Eigen::Vector2d x = samples_[i].head<2>();
+      const double w = std::min(1.0, kHuber * scale / std::max(residuals[i], 1e-12));
+      normal += w * x * x.transpose();
+      rhs += w * samples_[i].z() * x;
+    }
+    coef = normal.inverse() * rhs;
+  }
+  const Eigen::Matrix2d covariance = scale * scale * normal.inverse();
+  // Shrunk by (1 - (min_t / t)^2) (zero within min_t standard errors): a coefficient near the
+  // threshold is applied in part, so that one sample more or less never switches a whole
+  // correction on or off.
+  const auto significant = [&](int i, double bound) {
+    const double se = std::sqrt(std::max(covariance(i, i), 0.0));
+    const double t = std::abs(coef[i]) / std::max(se, 1e-12);
+    if (!(t > params_.min_t)) return 0.0;
+    const double shrink = 1.0 - (params_.min_t / t) * (params_.min_t / t);
+    return std::clamp(shrink * coef[i], -bound, bound);
+  };
+  per_m_ = significant(0, params_.max_per_m);
+  per_rad_ = significant(1, params_.max_per_rad);
 }
 
 }  // namespace shape_slam

@@ -52,6 +52,7 @@ void ShapeSlamParams::Validate() const {
   submaps.Validate();
   loop_closure.Validate();
   odometry_noise.Validate();
+  odometry_calibration.Validate();
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::min_inlier_ratio must be in [0, 1]");
   }
@@ -133,6 +134,7 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
       map_(params.index_cell_size_m),
       loop_closer_(params.loop_closure, ToScanMatchParams(params)),
       odometry_noise_(params.odometry_noise),
+      odometry_calibrator_(params.odometry_calibration),
       tracking_params_(params),
       velocity_(params.motion_model) {
   params_.Validate();
@@ -180,7 +182,9 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
   if (!last_T_map_robot_) return prediction;  // the first scan defines the map frame
   prediction.T_map_robot = *last_T_map_robot_;
   if (odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot && last_T_odom_robot_) {
-    const Pose2 delta = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+    const Pose2 raw = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+    const Pose2 delta = odometry_calibrator_.Correct(raw);
+    prediction.raw_odometry_delta = raw;
     prediction.odometry_delta = delta;
     prediction.T_map_robot = *last_T_map_robot_ * delta;
   } else {
@@ -581,16 +585,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
   const internal::Localization& loc = registration.loc;
-  if (params_.odometry_noise.learn && prediction.odometry_delta && loc.trusted &&
-      !loc.odometry_overridden) {
-    // What the scan itself says, not the estimate the prior already pulled (ScanOwnCorrection).
-    const OdometryNoiseParams& noise = tracking_params_.odometry_noise;
-    if (const std::optional<Pose2> own = ScanOwnCorrection(
-            loc.correction, loc.covariance, OdometryCovariance(*prediction.odometry_delta, noise),
-            noise.learn_max_scan_sigma_m, noise.learn_max_scan_sigma_rad)) {
-      LearnOdometryNoise(*prediction.odometry_delta, *own);
-    }
-  }
+  LearnOdometry(prediction, loc);
   // Poses in the tracking frame (the local frame with submaps, else the map's).
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
   Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
@@ -664,6 +659,30 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
     report.odometry_overridden = r.loc.odometry_overridden;
   }
   return r;
+}
+
+// A trusted registration that the odometry did not override teaches the odometry model: what the
+// scan itself says, not the estimate the prior already pulled (ScanOwnCorrection), is one
+// sample of the increments' heading error (OdometryCalibrator) and of their noise. The
+// calibration serves the submap design only: the global one, kept for A/B until it is deleted,
+// keeps its measured behaviour (with it, 5 copies: intel odom-bad better, aces odom-bias and
+// intel worse; docs/design.md, "Calibrating the odometry's heading").
+void ShapeSlam::LearnOdometry(const Prediction& prediction, const internal::Localization& loc) {
+  if (!prediction.odometry_delta || !loc.trusted || loc.odometry_overridden) return;
+  const bool calibrate = params_.odometry_calibration.enabled && UseSubmaps();
+  if (!params_.odometry_noise.learn && !calibrate) return;
+  const OdometryNoiseParams& noise = tracking_params_.odometry_noise;
+  const std::optional<Pose2> own = ScanOwnCorrection(
+      loc.correction, loc.covariance, OdometryCovariance(*prediction.odometry_delta, noise),
+      noise.learn_max_scan_sigma_m, noise.learn_max_scan_sigma_rad);
+  if (!own) return;
+  if (calibrate) {
+    const Pose2& raw = *prediction.raw_odometry_delta;
+    odometry_calibrator_.Add(raw, prediction.odometry_delta->theta - raw.theta + own->theta);
+    odometry_.heading_per_m = odometry_calibrator_.HeadingPerMetre();
+    odometry_.heading_per_rad = odometry_calibrator_.HeadingPerRadian();
+  }
+  if (params_.odometry_noise.learn) LearnOdometryNoise(*prediction.odometry_delta, *own);
 }
 
 // A trusted registration's own correction of the odometry's prediction: one sample of the log's

@@ -1,6 +1,7 @@
 // The odometry noise model and its learning from a log (odometry_noise.h): the learned scale
 // matches the spread of the corrections it is given, ignores a few glitches, stays within its
-// bounds, and nothing changes unless learning is on.
+// bounds, and nothing changes unless learning is on. The heading calibration finds a wheel-base
+// error and a per-metre drift through noise and outliers, and leaves unbiased odometry alone.
 #include "shape_slam/odometry_noise.h"
 
 #include <gtest/gtest.h>
@@ -179,6 +180,79 @@ TEST(OdometryNoiseTest, LearningFromTheScansOwnCorrectionDoesNotCollapse) {
       EXPECT_LT(learned, 0.1 * t);  // the collapse this guards against
     }
   }
+}
+
+// Steps of 0.1-0.5 m turning up to +-0.5 rad, whose heading the robot really turned `per_m` per
+// metre and `per_rad` per radian beyond the odometry's, seen through `noise_rad` of scan noise;
+// every 20th sample a wrong match 0.3 rad off.
+void FeedHeading(OdometryCalibrator& calibrator, double per_m, double per_rad, double noise_rad,
+                 int n, std::mt19937& prng, bool turns = true) {
+  std::uniform_real_distribution<double> distance(0.1, 0.5), turn(-0.5, 0.5);
+  std::normal_distribution<double> noise(0.0, noise_rad);
+  for (int i = 0; i < n; ++i) {
+    const Pose2 step(distance(prng), 0.0, turns ? turn(prng) : 0.0);
+    double error = per_m * step.x + per_rad * step.theta + noise(prng);
+    if (i % 20 == 19) error += 0.3;
+    calibrator.Add(step, error);
+  }
+}
+
+TEST(OdometryCalibrationTest, LearnsAWheelBaseErrorAndADriftPerMetre) {
+  OdometryCalibrator calibrator{OdometryCalibrationParams{}};
+  std::mt19937 prng(3);
+  FeedHeading(calibrator, -0.0175, 0.05, 0.003, 300, prng);
+  EXPECT_NEAR(calibrator.HeadingPerMetre(), -0.0175, 0.003);
+  EXPECT_NEAR(calibrator.HeadingPerRadian(), 0.05, 0.005);
+  const Pose2 corrected = calibrator.Correct(Pose2(0.5, 0.1, 0.2));
+  EXPECT_DOUBLE_EQ(corrected.x, 0.5);
+  EXPECT_DOUBLE_EQ(corrected.y, 0.1);
+  EXPECT_NEAR(corrected.theta,
+              0.2 + calibrator.HeadingPerRadian() * 0.2 +
+                  calibrator.HeadingPerMetre() * std::hypot(0.5, 0.1),
+              1e-12);
+}
+
+TEST(OdometryCalibrationTest, UnbiasedOdometryIsLeftAsItIs) {
+  OdometryCalibrator calibrator{OdometryCalibrationParams{}};
+  std::mt19937 prng(5);
+  FeedHeading(calibrator, 0.0, 0.0, 0.01, 300, prng);
+  EXPECT_EQ(calibrator.HeadingPerMetre(), 0.0);
+  EXPECT_EQ(calibrator.HeadingPerRadian(), 0.0);
+  const Pose2 step(0.3, 0.0, 0.1);
+  EXPECT_EQ(calibrator.Correct(step).theta, step.theta);
+}
+
+TEST(OdometryCalibrationTest, ATermTheLogNeverExercisesStaysZero) {
+  OdometryCalibrator calibrator{OdometryCalibrationParams{}};
+  std::mt19937 prng(9);
+  FeedHeading(calibrator, 0.02, 0.0, 0.003, 300, prng, /*turns=*/false);
+  EXPECT_NEAR(calibrator.HeadingPerMetre(), 0.02, 0.003);
+  EXPECT_EQ(calibrator.HeadingPerRadian(), 0.0);
+}
+
+TEST(OdometryCalibrationTest, WaitsForSamplesStaysInBoundsAndCanBeOff) {
+  OdometryCalibrationParams p;
+  p.max_per_m = 0.01;
+  OdometryCalibrator bounded(p);
+  std::mt19937 prng(11);
+  FeedHeading(bounded, 0.05, 0.0, 0.002, p.min_samples - 1, prng);
+  EXPECT_EQ(bounded.HeadingPerMetre(), 0.0);  // not enough samples yet
+  FeedHeading(bounded, 0.05, 0.0, 0.002, 100, prng);
+  EXPECT_DOUBLE_EQ(bounded.HeadingPerMetre(), 0.01);
+  p.enabled = false;
+  OdometryCalibrator off(p);
+  FeedHeading(off, 0.05, 0.0, 0.002, 100, prng);
+  EXPECT_EQ(off.HeadingPerMetre(), 0.0);
+}
+
+TEST(OdometryCalibrationTest, InvalidParamsAreRefused) {
+  OdometryCalibrationParams p;
+  p.min_samples = p.window + 1;
+  EXPECT_THROW(p.Validate(), std::invalid_argument);
+  p = OdometryCalibrationParams{};
+  p.max_per_m = -1.0;
+  EXPECT_THROW(p.Validate(), std::invalid_argument);
+  EXPECT_NO_THROW(OdometryCalibrationParams{}.Validate());
 }
 
 }  // namespace

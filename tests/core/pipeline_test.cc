@@ -488,6 +488,24 @@ TEST(PipelineSubmapTest, BiasedOdometryIsCorrectedByTheScans) {
   EXPECT_LT(MapWithFaults(biased, SubmapParamsWith(20)).ate_m, 0.05);
 }
 
+// The mapper learns the odometry's heading error (OdometryCalibrator): 2 deg per metre more of
+// wheel-base bias is 2 deg per metre more of learned correction, the other way; with the
+// calibration off nothing is learned.
+TEST(PipelineSubmapTest, TheOdometrysHeadingErrorIsLearned) {
+  const SimRun clean = Simulate(2);
+  const double bias = 2.0 * M_PI / 180.0;
+  const SimRun biased = WithOdometryFaults(clean, 0, 0.0, bias);
+  const auto learned = [](const SimRun& run, bool enabled) {
+    ShapeSlamParams params = SubmapParamsWith(20);
+    params.odometry_calibration.enabled = enabled;
+    ShapeSlam slam(params);
+    for (const LaserScan& scan : run.scans) slam.Process(scan);
+    return slam.Odometry().heading_per_m;
+  };
+  EXPECT_NEAR(learned(biased, true) - learned(clean, true), -bias, 0.25 * bias);
+  EXPECT_EQ(learned(biased, false), 0.0);
+}
+
 // Without odometry, a scan that no match places (here one of a round room) is a keyframe at the motion model's guess that starts new submaps, tied to the previous
 // keyframe by a weak, guessed edge; the scans after it are tracked against what it saw
 // and the closed loop is still right. With restart_when_lost off the scan is left out.
