@@ -57,10 +57,11 @@ struct KeyframeParams {
 /// change what the next scans are matched against. The global map is made once, at Finish(),
 /// from the keyframes at their optimised poses.
 struct SubmapParams {
-  /// false: the earlier design, one global map rebuilt or deformed after loop closures (kept
-  /// for A/B comparison while the submap design is measured).
-  /// Continuing a loaded map (the ShapeSlam constructor that takes one) uses that design.
-  bool enabled = false;
+  /// The default since 2026-12-05 (docs/design.md, "Submaps"). false: the earlier design, one
+  /// global map rebuilt or deformed after loop closures, kept for A/B comparison until it is
+  /// deleted (issue 22). Continuing a loaded map (the ShapeSlam constructor that takes one)
+  /// still uses that design.
+  bool enabled = true;
   /// Keyframes per submap (each keyframe is inserted into two submaps).
   int keyframes = 40;
   /// Without odometry, a scan that no match confirmed (its pose the constant-velocity guess),
