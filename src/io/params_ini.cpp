@@ -225,7 +225,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"odometry_calibration", "enabled", "with submaps: learn the odometry's heading error from the trusted matches and correct the increments by it (the global design keeps the raw increments)", &p.odometry_calibration.enabled},
       {"odometry_calibration", "window", "... over the last this many matches", &p.odometry_calibration.window},
       {"odometry_calibration", "min_samples", "... once this many are in", &p.odometry_calibration.min_samples},
-      {"odometry_calibration", "min_t", "... each term (per metre, per radian turned) only when this many standard errors from zero", &p.odometry_calibration.min_t},
+      {"odometry_calibration", "min_t", "... each term (per metre, per radian turned) only beyond this many standard errors from zero, shrunk near it", &p.odometry_calibration.min_t},
       {"odometry_calibration", "max_per_m", "... the heading error per metre travelled at most (rad/m)", &p.odometry_calibration.max_per_m},
       {"odometry_calibration", "max_per_rad", "... the heading error per radian turned at most", &p.odometry_calibration.max_per_rad},
       {"scan_match", "seed_pairs", "scan-to-scan matching without a guess (shape-slam match): most reliable pairs tried", &p.scan_match_seed_pairs},
