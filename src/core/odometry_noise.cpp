@@ -149,7 +149,7 @@ void OdometryCalibrator::Fit() {
   constexpr double kHuber = 1.345;
   constexpr double kRidge = 1e-9;  // keeps the normal matrix invertible
   Eigen::Vector2d coef = Eigen::Vector2d::Zero();
-  Eigen::Matrix2d normal = Eigen::Matrix2d::Identity();
+  Eigen::Matrix2d normal;
   double scale = 0.0;
   std::vector<double> residuals(samples_.size());
   for (int iteration = 0; iteration < 5; ++iteration) {

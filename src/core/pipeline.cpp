@@ -246,7 +246,7 @@ MapUpdateStats ShapeSlam::InsertIntoSubmaps(const std::vector<Polyline>& perceiv
       computed = submap.map.Visible(T_local_sensor, internal::ModelVisibility(scan, false, params_));
     }
     const std::vector<VisiblePolyline>& visible =
-        submap.map.Empty() ? computed : front ? visible_front : computed;
+        front && !submap.map.Empty() ? visible_front : computed;
     const bool trusted = placement == Placement::kMatched || submap.map.Empty();
     MapUpdateStats stats =
         UpdateMap(submap.map, perceived, T_local_sensor, visible, scan, trusted, params_.map_update);
