@@ -105,6 +105,7 @@ struct RunOutput {
   int loop_closures = 0, loop_searches = 0, loop_closures_found = 0, map_rebuilds = 0,
       map_deformations = 0;
   long long keyframes_reinserted = 0;
+  int keyframes_in_map = 0;  // run --map: keyframes tied to the loaded map
   double processing_s = 0.0;
 };
 
@@ -149,6 +150,7 @@ RunOutput RunMapper(ShapeSlam& slam, std::vector<LaserScan>& scans, bool quiet) 
   out.map_rebuilds = slam.NumMapRebuilds();
   out.map_deformations = slam.NumMapDeformations();
   out.keyframes_reinserted = slam.NumKeyframesReinserted();
+  out.keyframes_in_map = slam.NumKeyframesInLoadedMap();
   out.processing_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return out;
@@ -230,13 +232,14 @@ void PlaceFirstScan(MapStart& start, const std::vector<LaserScan>& scans,
   }
 }
 
-void StartMapJson(io::JsonWriter& json, const MapStart& start) {
+void StartMapJson(io::JsonWriter& json, const MapStart& start, int keyframes_in_map) {
   json.Key("start_map").BeginObject().Key("path").Value(start.path);
   json.Key("polylines").Value(start.polylines);
   json.Key("initial_pose_given").Value(start.initial.has_value());
   json.Key("first_scan").Value(start.first.scan);
   json.Key("x").Value(start.first.T_map_robot.x).Key("y").Value(start.first.T_map_robot.y);
-  json.Key("theta").Value(start.first.T_map_robot.theta).EndObject();
+  json.Key("theta").Value(start.first.T_map_robot.theta);
+  json.Key("keyframes_in_map").Value(keyframes_in_map).EndObject();
 }
 
 // Bytes of a 5 cm occupancy grid (1 byte per cell, MRPT's 8-bit cells) covering the map's
@@ -326,7 +329,7 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
                       const OdometryReport& odometry, const std::optional<MapStart>& start) {
   io::JsonWriter json;
   json.BeginObject().Key("scans").Value(out.trajectory.size());
-  if (start) StartMapJson(json, *start);
+  if (start) StartMapJson(json, *start, out.keyframes_in_map);
   json.Key("wall_s").Value(wall_s).Key("processing_s").Value(out.processing_s);
   double sum = 0.0;
   for (const double ms : out.scan_ms) sum += ms;

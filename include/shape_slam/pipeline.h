@@ -263,13 +263,15 @@ class ShapeSlam {
 
   /// Continues mapping in a saved map (`shape-slam run --map`): `initial_map` (map frame) is
   /// the starting map, kept and extended by the new scans like a map the mapper built itself
-  /// (its polylines are merged with what the new scans see, §5.2), and is the base on which the
-  /// map is rebuilt after a loop closure. It is not in the pose graph: its frame is a fixed
-  /// node to which every keyframe with a trusted match is tied by its pose, so that loop
-  /// closures among the new keyframes keep them in that frame. The first scan is predicted at
-  /// `T_map_robot_first` (the Localizer's global search or a known pose) and localized against
-  /// the map from there (§4.3, no odometry yet). Throws std::invalid_argument for invalid
-  /// params, an empty map or a pose that is not finite.
+  /// (its polylines are merged with what the new scans see, §5.2). It is a frozen submap: the
+  /// new scans are tracked against submaps of their own, and every keyframe is registered
+  /// against it at its global pose (by shape without a guess from there, §4.3). Its frame is
+  /// a fixed node of the pose graph, to which a keyframe so registered is tied by a robust
+  /// edge, so that loop closures among the new keyframes keep them in that frame. The first
+  /// scan is predicted at `T_map_robot_first` (the Localizer's global search or a known pose)
+  /// and localized in the map from there; the local frame starts as the map's. (With
+  /// SubmapParams::enabled false the loaded map is the start of the single global map.) Throws
+  /// std::invalid_argument for invalid params, an empty map or a pose that is not finite.
   ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_map,
             const Pose2& T_map_robot_first);
 
@@ -312,6 +314,8 @@ class ShapeSlam {
   /// Map deformations instead of a rebuild (LoopClosureParams::deform_max_shift_m).
   int NumMapDeformations() const { return num_deformations_; }
   long long NumKeyframesReinserted() const { return num_reinserted_; }
+  /// Continuing a loaded map: the keyframes tied to its frame by a trusted registration in it.
+  int NumKeyframesInLoadedMap() const { return num_map_anchors_; }
   /// A submap (SubmapParams): polylines in the local tracking frame, from num_keyframes
   /// keyframes in order from first_keyframe.
   struct Submap {
@@ -401,9 +405,15 @@ class ShapeSlam {
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
                                const Pose2& T_map_robot, Placement placement,
                                const Eigen::Matrix3d& covariance) const;
-  void AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
+  // Returns whether an edge to the loaded map asks for an optimisation (AnchorInLoadedMap).
+  bool AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
                    const Pose2& T_track_robot, Placement placement,
                    const Eigen::Matrix3d& covariance);
+  internal::Localization LocalizeInLoadedMap(const ScanShapes& shapes, const LaserScan& scan,
+                                             const Pose2& T_map_sensor_pred,
+                                             const std::optional<Pose2>& drive) const;
+  bool AnchorInLoadedMap(const LaserScan& scan, const ScanShapes& shapes, int node,
+                         const Pose2& T_map_robot);
   void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                     const Eigen::Matrix3d& covariance);
   void OptimizeAndRebuild(bool at_end);
@@ -421,6 +431,8 @@ class ShapeSlam {
   // With submaps: the keyframes and optimisations map_ was made from (-1: never made).
   mutable std::pair<int, int> map_made_from_{-1, -1};
   int num_optimizations_ = 0;
+  int num_map_anchors_ = 0;  // keyframes tied to the loaded map by a trusted registration
+  int last_map_anchor_node_ = -1;  // the node of the last of them
   PolylineMap initial_map_;  // the map given to start from (empty when mapping from scratch)
   PoseGraph graph_;
   std::vector<Keyframe> keyframes_;

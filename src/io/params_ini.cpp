@@ -168,7 +168,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "window_half_m", "window search over the old place: half window at most (m)", &p.loop_closure.window_half_m},
       {"loop_closure", "window_resolution_m", "... cell size of its likelihood field (m)", &p.loop_closure.window_resolution_m},
       {"loop_closure", "window_max_evaluations", "... search nodes scored at most", &p.loop_closure.window_max_evaluations},
-      {"loop_closure", "min_inlier_ratio", "accept when this fraction of the new scan fits the old place ...", &p.loop_closure.min_inlier_ratio},
+      {"loop_closure", "min_inlier_ratio", "accept when this fraction of the new scan fits the old place (run --map: the loaded map) ...", &p.loop_closure.min_inlier_ratio},
       {"loop_closure", "min_reverse_inlier_ratio", "... and this fraction of the old place that the new scan could see fits it", &p.loop_closure.min_reverse_inlier_ratio},
       {"loop_closure", "max_match_sigma_m", "matches less certain than this in some direction (m) close no loop", &p.loop_closure.max_match_sigma_m},
       {"loop_closure", "covariance_scale", "edge covariance = refinement covariance times this", &p.loop_closure.covariance_scale},

@@ -108,6 +108,8 @@ TEST(PipelineFromMapTest, ContinuesTheMapFromAKnownFirstPose) {
   const Mapped whole = MapScans(continued, scans, 0, scans.size());
 
   ASSERT_EQ(whole.trajectory.size(), scans.size());
+  // Its keyframes on the loaded part are tied to the map (a frozen submap), not only the first.
+  EXPECT_GE(continued.NumKeyframesInLoadedMap(), 10);
   EXPECT_GE(FractionAgreeing(part.trajectory, whole.trajectory), 0.9);
   EXPECT_GE(FractionCovered(part.map, whole.map, 0.1), 0.95);  // the loaded map is kept
   // ... and extended where the first part never saw: the block's north wall (world y = 7),

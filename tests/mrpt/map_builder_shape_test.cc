@@ -1,6 +1,7 @@
 // CMetricMapBuilderShape fed the way icp-slam feeds CMetricMapBuilderICP, against the mapper fed
 // by shape_slam_io's rawlog reader (what `shape-slam run` does): same scans, same poses.
 #include <gtest/gtest.h>
+#include <Eigen/Geometry>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/io/CFileGZInputStream.h>
 #include <mrpt/maps/CSimpleMap.h>
@@ -40,12 +41,10 @@ bool Readable(const std::string& path) { return std::ifstream(path).good(); }
 // icp-slam's loop over (the steps [first_step, max_steps) of) a rawlog, entry by entry as
 // mrpt-map-builder reads it (ProcessRawlogEntry: a sensory frame without an action before it is
 // used, where CRawlog drops it); returns the pose estimate after every step fed.
-// `closures`, if given, gets the builder's loop-closure count after each step it took.
 std::vector<mrpt::poses::CPose3D> FeedLikeIcpSlam(CMetricMapBuilderShape& builder,
                                                   const std::string& path,
                                                   std::size_t max_steps = SIZE_MAX,
-                                                  std::size_t first_step = 0,
-                                                  std::vector<int>* closures = nullptr) {
+                                                  std::size_t first_step = 0) {
   mrpt::io::CFileGZInputStream file(path);
   auto archive = mrpt::serialization::archiveFrom(file);
   std::vector<mrpt::poses::CPose3D> poses;
@@ -61,9 +60,47 @@ std::vector<mrpt::poses::CPose3D> FeedLikeIcpSlam(CMetricMapBuilderShape& builde
     if (!target.ProcessRawlogEntry(entry)) continue;
     if (step++ < first_step) continue;
     poses.push_back(builder.getCurrentPoseEstimation()->getMeanVal());
-    if (closures) closures->push_back(builder.Mapper().NumLoopClosures());
   }
   return poses;
+}
+
+// Two trajectories over the same scans (same timestamps), `a` moved onto `b` by the rigid
+// motion that fits best (least squares over the positions): the scans in common and the
+// position differences left.
+struct Agreement {
+  std::size_t common = 0;
+  double rms_m = 0.0, max_m = 0.0;
+};
+Agreement RigidAgreement(const std::vector<StampedPose>& a, const std::vector<StampedPose>& b) {
+  std::vector<std::pair<Point2, Point2>> pairs;
+  for (const StampedPose& pa : a) {
+    const auto it = std::find_if(b.begin(), b.end(), [&](const StampedPose& pb) {
+      return pb.timestamp_s == pa.timestamp_s;
+    });
+    if (it != b.end()) pairs.emplace_back(pa.pose.Translation(), it->pose.Translation());
+  }
+  Agreement agreement;
+  agreement.common = pairs.size();
+  if (pairs.empty()) return agreement;
+  Point2 ca = Point2::Zero(), cb = Point2::Zero();
+  for (const auto& [p, q] : pairs) ca += p, cb += q;
+  ca /= pairs.size();
+  cb /= pairs.size();
+  double dot = 0.0, cross = 0.0;
+  for (const auto& [p, q] : pairs) {
+    const Point2 u = p - ca, v = q - cb;
+    dot += u.dot(v);
+    cross += u.x() * v.y() - u.y() * v.x();
+  }
+  const Eigen::Rotation2Dd R(std::atan2(cross, dot));
+  double sum = 0.0;
+  for (const auto& [p, q] : pairs) {
+    const double d = (R * (p - ca) + cb - q).norm();
+    sum += d * d;
+    agreement.max_m = std::max(agreement.max_m, d);
+  }
+  agreement.rms_m = std::sqrt(sum / pairs.size());
+  return agreement;
 }
 
 // MRPT's own loop (CRawlog::getActionObservationPairOrObservation): the steps it gives.
@@ -217,35 +254,21 @@ TEST(CMetricMapBuilderShape, InitializeFromASimplemapContinuesItsMap) {
   EXPECT_EQ(at_start.y(), last_frame.y());
   EXPECT_EQ(continued.getCurrentlyBuiltMapSize(), simplemap.size());
 
-  // The rest of the log from the last keyframe on, against the whole log mapped at once: the
-  // online estimates of the two builders agree step by step until either closes a loop (on
-  // this log the whole run does, some 30-60 steps later): its pose graph then moves its early
-  // part, which the continued builder holds fixed as its loaded map (0.5 m apart after that,
-  // each consistent in its own frame).
+  // The rest of the log from the last keyframe on, against the whole log mapped at once. The
+  // continued builder holds the loaded map fixed (a frozen submap it anchors its keyframes to),
+  // while the whole run's pose graph moves its early part when it closes the loop (by up to
+  // 0.5 m): the two trajectories agree up to one rigid motion and that bend (measured: 126
+  // scans, RMS 0.155 m, max 0.316 m; the global design, continuing in one map: 0.112, 0.260).
   const std::size_t last_keyframe_step = kSteps - 1;  // a keyframe every few steps: close by
-  std::vector<int> online_closures, reference_closures;
-  const std::vector<mrpt::poses::CPose3D> online =
-      FeedLikeIcpSlam(continued, kSenaLog, SIZE_MAX, last_keyframe_step, &online_closures);
-  // A loaded map is continued with the global design (the ShapeSlam constructor that takes one):
-  // the reference maps the whole log with that design too (with submaps its graph is optimised
-  // every few keyframes, loop or not).
-  CMetricMapBuilderShape::Options global_design;
-  global_design.params.submaps.enabled = false;
-  CMetricMapBuilderShape whole(global_design);
-  const std::vector<mrpt::poses::CPose3D> reference =
-      FeedLikeIcpSlam(whole, kSenaLog, SIZE_MAX, 0, &reference_closures);
-  ASSERT_EQ(online.size() + last_keyframe_step, reference.size());
-  std::size_t compared = 0;
-  while (compared < online.size() && online_closures[compared] == online_closures.front() &&
-         reference_closures[last_keyframe_step + compared] ==
-             reference_closures[last_keyframe_step]) {
-    ++compared;
-  }
-  EXPECT_GE(compared, 20u);  // the comparison covers a stretch of the log
-  for (std::size_t i = 0; i < compared; ++i) {
-    const mrpt::poses::CPose3D& q = reference[last_keyframe_step + i];
-    EXPECT_LT(std::hypot(online[i].x() - q.x(), online[i].y() - q.y()), 0.05) << "step " << i;
-  }
+  FeedLikeIcpSlam(continued, kSenaLog, SIZE_MAX, last_keyframe_step);
+  CMetricMapBuilderShape whole;
+  FeedLikeIcpSlam(whole, kSenaLog);
+  EXPECT_GT(continued.Mapper().NumKeyframesInLoadedMap(), 10);
+  const Agreement agreement =
+      RigidAgreement(continued.Mapper().Trajectory(), whole.Mapper().Trajectory());
+  EXPECT_GE(agreement.common, 100u);
+  EXPECT_LT(agreement.rms_m, 0.2);
+  EXPECT_LT(agreement.max_m, 0.4);
   mrpt::maps::CSimpleMap out;
   continued.getCurrentlyBuiltMap(out);
   EXPECT_EQ(out.size(), simplemap.size() + continued.Mapper().Keyframes().size());
