@@ -102,9 +102,7 @@ struct RunOutput {
   std::vector<const char*> scan_track;  // per scan: how it was placed (TrackName)
   std::vector<bool> scan_keyframe;      // per scan: it updated the map
   std::size_t matched = 0;
-  int loop_closures = 0, loop_searches = 0, loop_closures_found = 0, map_rebuilds = 0,
-      map_deformations = 0;
-  long long keyframes_reinserted = 0;
+  int loop_closures = 0, loop_searches = 0, loop_closures_found = 0;
   int keyframes_in_map = 0;  // run --map: keyframes tied to the loaded map
   double processing_s = 0.0;
 };
@@ -142,14 +140,11 @@ RunOutput RunMapper(ShapeSlam& slam, std::vector<LaserScan>& scans, bool quiet) 
     progress.Update(i + 1);
   }
   progress.Finish();
-  slam.Finish();  // final pose-graph optimisation and map rebuild
+  slam.Finish();  // final pose-graph optimisation
   out.trajectory = slam.Trajectory();  // corrected by the last pose-graph optimisation
   out.loop_closures = slam.NumLoopClosures();
   out.loop_searches = slam.NumLoopSearches();
   out.loop_closures_found = slam.NumLoopClosuresFound();
-  out.map_rebuilds = slam.NumMapRebuilds();
-  out.map_deformations = slam.NumMapDeformations();
-  out.keyframes_reinserted = slam.NumKeyframesReinserted();
   out.keyframes_in_map = slam.NumKeyframesInLoadedMap();
   out.processing_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -354,9 +349,6 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("loop_closures").Value(out.loop_closures);
   json.Key("loop_searches").Value(out.loop_searches);
   json.Key("loop_closures_found").Value(out.loop_closures_found);
-  json.Key("map_rebuilds").Value(out.map_rebuilds);
-  json.Key("map_deformations").Value(out.map_deformations);
-  json.Key("keyframes_reinserted").Value(out.keyframes_reinserted);
   json.Key("odometry").BeginObject().Key("requested").Value(params.use_odometry);
   json.Key("status").Value(ToString(odometry.status));
   json.Key("scans_with_odometry").Value(odometry.scans_with_odometry);

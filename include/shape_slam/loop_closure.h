@@ -157,7 +157,7 @@ struct LoopClosureParams {
   /// ... and the loop search counts it as this much driving (m): the search region, heading
   /// range and correction bounds beyond it grow as after that much drift.
   double guess_graph_m = 100.0;
-  /// With submaps and without odometry, a keyframe's edge to the previous one is widened along
+  /// Without odometry, a keyframe's edge to the previous one is widened along
   /// a ridge of fits (internal::WidenedAlongRidge): shifts of up to this much (metres; 0: off)
   /// along the direction it constrains least are tried ...
   double ridge_max_shift_m = 1.0;
@@ -166,21 +166,6 @@ struct LoopClosureParams {
   /// A loop edge that disagrees with the graph by more than this triggers optimisation.
   double min_correction_m = 0.05;
   double min_correction_rad = 0.01;
-  /// After an optimisation the map is rebuilt from the keyframes only when one of them moved by
-  /// more than this (metres, radians): a smaller shift is below what the map resolves, and the
-  /// rebuild costs a map update per keyframe.
-  double rebuild_min_shift_m = 0.03;
-  double rebuild_min_shift_rad = 0.005;
-  /// When no keyframe moved by more than this (metres, radians), the map is not rebuilt but
-  /// deformed: each polyline moves rigidly with the keyframe that last added or merged into it.
-  /// Cheap, and within the small shifts exact enough to track against; the keyframes involved
-  /// are inserted again at the next rebuild or at the end of the log (Finish). 0: always rebuild.
-  double deform_max_shift_m = 0.15;
-  double deform_max_shift_rad = 0.03;
-  /// The map as it stood after every this many keyframes is kept (a copy), so that a rebuild
-  /// starts from the last such copy before the first keyframe that moved instead of from an
-  /// empty map: keyframes before a closed loop hardly move. 0 keeps none (rebuild from scratch).
-  int rebuild_checkpoint_every = 64;
   PoseGraphParams graph;
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;

@@ -54,14 +54,10 @@ struct KeyframeParams {
 /// the newer one takes over when the older has its `keyframes` and is finished. A finished
 /// submap never changes. Loop closures only move pose-graph nodes: the local frame, the
 /// submaps and the scans' tracking are never rewritten, so one closure more or less cannot
-/// change what the next scans are matched against. The global map is made once, at Finish(),
-/// from the keyframes at their optimised poses.
+/// change what the next scans are matched against. The global map is made on demand (Map())
+/// from the keyframes at their optimised poses. (The earlier design, one global map rebuilt or
+/// deformed after every loop closure, was deleted on 2026-12-05: docs/design.md, "Submaps".)
 struct SubmapParams {
-  /// The default since 2026-12-05 (docs/design.md, "Submaps"). false: the earlier design, one
-  /// global map rebuilt or deformed after loop closures, kept for A/B comparison until it is
-  /// deleted (issue 22). Continuing a loaded map (the ShapeSlam constructor that takes one)
-  /// still uses that design.
-  bool enabled = true;
   /// Keyframes per submap (each keyframe is inserted into two submaps).
   int keyframes = 40;
   /// Without odometry, a scan that no match confirmed (its pose the constant-velocity guess),
@@ -269,8 +265,7 @@ class ShapeSlam {
   /// a fixed node of the pose graph, to which a keyframe so registered is tied by a robust
   /// edge, so that loop closures among the new keyframes keep them in that frame. The first
   /// scan is predicted at `T_map_robot_first` (the Localizer's global search or a known pose)
-  /// and localized in the map from there; the local frame starts as the map's. (With
-  /// SubmapParams::enabled false the loaded map is the start of the single global map.) Throws
+  /// and localized in the map from there; the local frame starts as the map's. Throws
   /// std::invalid_argument for invalid params, an empty map or a pose that is not finite.
   ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_map,
             const Pose2& T_map_robot_first);
@@ -280,23 +275,20 @@ class ShapeSlam {
   /// localised by prediction and leaves the map unchanged).
   ScanReport Process(const LaserScan& scan);
 
-  /// At the end of the log: a final optimisation of the pose graph (when it holds loop edges)
-  /// and the map rebuilt from the keyframes at their corrected poses. Call it before writing the
-  /// outputs; Process may still be called afterwards. It frees the rebuild checkpoints
-  /// (rebuild_checkpoint_every; tens of MB on a long log): a rebuild after it starts from the
-  /// first keyframe.
+  /// At the end of the log: a final optimisation of the pose graph (when it holds loop edges).
+  /// Call it before writing the outputs; Process may still be called afterwards.
   void Finish();
 
-  /// The global map. With submaps it is made on demand from every keyframe at its optimised
-  /// pose (§5.2), and remade only after new keyframes or an optimisation.
+  /// The global map: the loaded map (if any) and every keyframe merged into it (§5.2) at its
+  /// optimised pose, made on demand and remade only after new keyframes or an optimisation.
   const PolylineMap& Map() const;
   const ShapeSlamParams& Params() const { return params_; }
 
   /// The pose of every processed scan, corrected by the latest pose-graph optimisation (each
   /// scan rides on the keyframe it was localized from). This is the trajectory to report.
   std::vector<StampedPose> Trajectory() const;
-  /// The pose of every processed scan in the frame it was tracked in: with submaps the local
-  /// frame, which loop closures never change; without submaps the same as Trajectory().
+  /// The pose of every processed scan in the frame it was tracked in: the local frame, which
+  /// loop closures never change.
   std::vector<StampedPose> LocalTrajectory() const;
   /// The keyframe pose graph (nodes: keyframes in order; edges: consecutive and loop closures).
   const PoseGraph& Graph() const { return graph_; }
@@ -308,12 +300,6 @@ class ShapeSlam {
   /// Every loop closure found and what became of it (LoopCloser::Events); keyframe indices as
   /// in Keyframes().
   const std::vector<LoopEvent>& LoopEvents() const { return loop_closer_.Events(); }
-  /// Map rebuilds after a pose-graph optimisation moved keyframes, and the keyframes they
-  /// inserted again (the cost of keeping the map consistent with the graph).
-  int NumMapRebuilds() const { return num_rebuilds_; }
-  /// Map deformations instead of a rebuild (LoopClosureParams::deform_max_shift_m).
-  int NumMapDeformations() const { return num_deformations_; }
-  long long NumKeyframesReinserted() const { return num_reinserted_; }
   /// Continuing a loaded map: the keyframes tied to its frame by a trusted registration in it.
   int NumKeyframesInLoadedMap() const { return num_map_anchors_; }
   /// A submap (SubmapParams): polylines in the local tracking frame, from num_keyframes
@@ -324,7 +310,7 @@ class ShapeSlam {
     int num_keyframes = 0;
   };
   /// Submaps (SubmapParams): the finished ones (local tracking frame, never changed once
-  /// finished) and how many are active. Empty and 0 when submaps are off.
+  /// finished) and how many are active.
   const std::vector<Submap>& FinishedSubmaps() const { return finished_submaps_; }
   int NumActiveSubmaps() const { return static_cast<int>(active_submaps_.size()); }
   /// Whether the log's odometry was used (see OdometryStatus).
@@ -349,13 +335,7 @@ class ShapeSlam {
   struct Keyframe {
     LaserScan scan;                      // counter-clockwise beams
     bool trusted = false;                // its pose was confirmed by a match
-    Pose2 T_map_robot_in_map;            // where the map holds its scan (inserted at this pose)
-    Pose2 T_local_robot;                 // its pose in the tracking frame (submaps: never moved)
-  };
-  // The map as it stood once the first `keyframes` keyframes were in it.
-  struct MapCheckpoint {
-    int keyframes = 0;
-    PolylineMap::Snapshot map;
+    Pose2 T_local_robot;                 // its pose in the tracking frame (never moved)
   };
   struct ScanAnchor {
     double timestamp_s = 0.0;
@@ -366,9 +346,7 @@ class ShapeSlam {
   // constant-velocity guess) left unconfirmed; or the motion model's guess after a lost scan
   // that starts new submaps (SubmapParams::restart_when_lost).
   enum class Placement { kMatched, kUnconfirmed, kGuessed };
-  bool UseSubmaps() const { return params_.submaps.enabled; }
-  // The map each scan is registered against and its frame: the older active submap in the
-  // local frame, or the global map.
+  // The map each scan is registered against: the older active submap (local frame).
   const PolylineMap& TrackingMap() const;
   Pose2 TrackingPose(int keyframe) const;
   // The global pose of a pose in the tracking frame (the latest keyframe's correction).
@@ -398,7 +376,7 @@ class ShapeSlam {
   void UpdateMotion(const Pose2& T_track_robot, bool reset_lost);
   void LearnOdometry(const Prediction& prediction, const internal::Localization& loc);
   void LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction);
-  Pose2 UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
+  void UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                           Registration& registration, ScanReport& report);
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
@@ -416,19 +394,15 @@ class ShapeSlam {
                          const Pose2& T_map_robot);
   void AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                     const Eigen::Matrix3d& covariance);
-  void OptimizeAndRebuild(bool at_end);
-  void DeformMap(int first_moved);
-  void TagTouched(const MapUpdateStats& stats, int keyframe);
-  void RebuildFrom(int first_moved);
-  void CheckpointMap(int keyframes);
+  void Optimize();
   void BuildGlobalMap() const;
   /// Keyframe k's scan inserted (§5.2) into `map` at its optimised pose.
   MapUpdateStats InsertKeyframe(PolylineMap& map, int k, const ScanInsertionParams& insertion) const;
   std::vector<StampedPose> AnchoredPoses(bool tracking_frame) const;
 
   ShapeSlamParams params_;
-  mutable PolylineMap map_;  // submaps: a cache made by Map()
-  // With submaps: the keyframes and optimisations map_ was made from (-1: never made).
+  mutable PolylineMap map_;  // a cache made by Map()
+  // The keyframes and optimisations map_ was made from (-1: never made).
   mutable std::pair<int, int> map_made_from_{-1, -1};
   int num_optimizations_ = 0;
   int num_map_anchors_ = 0;  // keyframes tied to the loaded map by a trusted registration
@@ -438,13 +412,6 @@ class ShapeSlam {
   std::vector<Keyframe> keyframes_;
   std::vector<Submap> active_submaps_;    // oldest first: the one scans are registered against
   std::vector<Submap> finished_submaps_;  // never changed again
-  std::vector<MapCheckpoint> checkpoints_;  // increasing keyframes
-  int num_rebuilds_ = 0;
-  int num_deformations_ = 0;
-  // First keyframe whose part of the map was deformed rather than rebuilt (-1: none): the next
-  // rebuild starts no later than there, and no checkpoint is kept until then.
-  int deformed_from_ = -1;
-  long long num_reinserted_ = 0;
   std::vector<LoopKeyframe> places_;  // the keyframes' shapes, node and travel (same order)
   LoopCloser loop_closer_;
   std::vector<ScanAnchor> anchors_;

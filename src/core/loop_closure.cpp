@@ -153,13 +153,6 @@ void LoopClosureParams::Validate() const {
   Positive(sigma_floor_rad, "LoopClosureParams::sigma_floor_rad");
   NonNegative(min_correction_m, "LoopClosureParams::min_correction_m");
   NonNegative(min_correction_rad, "LoopClosureParams::min_correction_rad");
-  NonNegative(rebuild_min_shift_m, "LoopClosureParams::rebuild_min_shift_m");
-  NonNegative(rebuild_min_shift_rad, "LoopClosureParams::rebuild_min_shift_rad");
-  NonNegative(deform_max_shift_m, "LoopClosureParams::deform_max_shift_m");
-  NonNegative(deform_max_shift_rad, "LoopClosureParams::deform_max_shift_rad");
-  if (rebuild_checkpoint_every < 0) {
-    throw std::invalid_argument("LoopClosureParams::rebuild_checkpoint_every must be >= 0");
-  }
   Positive(max_correction_rad, "LoopClosureParams::max_correction_rad");
   NonNegative(max_correction_rad_per_m, "LoopClosureParams::max_correction_rad_per_m");
   if (confirm_within_keyframes < 1) {

@@ -153,9 +153,7 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_m
       !std::isfinite(T_map_robot_first.theta)) {
     throw std::invalid_argument("ShapeSlam: the first robot pose is not finite");
   }
-  initial_map_ = PolylineMap(params_.index_cell_size_m);
   for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
-  if (!UseSubmaps()) map_ = initial_map_;
   graph_.AddNode(Pose2());  // node 0, held fixed: the frame of the loaded map (AddMapAnchor)
   last_T_map_robot_ = T_map_robot_first;
 }
@@ -202,17 +200,16 @@ bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
 Pose2 ShapeSlam::KeyframePose(int keyframe) const { return graph_.Node(places_[keyframe].node); }
 
 const PolylineMap& ShapeSlam::TrackingMap() const {
-  if (!UseSubmaps()) return map_;
   static const PolylineMap kEmpty;
   return active_submaps_.empty() ? kEmpty : active_submaps_.front().map;
 }
 
 Pose2 ShapeSlam::TrackingPose(int keyframe) const {
-  return UseSubmaps() ? keyframes_[keyframe].T_local_robot : KeyframePose(keyframe);
+  return keyframes_[keyframe].T_local_robot;
 }
 
 Pose2 ShapeSlam::GlobalPose(const Pose2& T_track_robot) const {
-  if (!UseSubmaps() || keyframes_.empty()) return T_track_robot;
+  if (keyframes_.empty()) return T_track_robot;
   const int last = static_cast<int>(keyframes_.size()) - 1;
   return KeyframePose(last) * keyframes_[last].T_local_robot.Inverse() * T_track_robot;
 }
@@ -286,10 +283,8 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
       RefineAlignment(samples, prev_fine, estimate, std::nullopt, params_.refinement);
   // Along a corridor that the two views cannot place, the step is only as certain as the
   // prediction: with odometry it held the tracking there; without, the edge is widened, so
-  // that a loop closure corrects a slide without bending the rest of the path. Only with
-  // submaps: in the global design the graph's corrections come back into the tracking through
-  // the rebuilt map, and the softer corridors made its worst copies worse (docs/notebook.md).
-  const bool widen = UseSubmaps() && odometry_.status != OdometryStatus::kUsed &&
+  // that a loop closure corrects a slide without bending the rest of the path.
+  const bool widen = odometry_.status != OdometryStatus::kUsed &&
                      lc.ridge_max_shift_m > 0.0;
   // One model for the fit check and the ridge (its open ends only prepared when widening).
   const internal::ModelIcp check(prev_fine, params_.matcher.inlier_distance_m,
@@ -321,9 +316,9 @@ bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
     edge->to = node;
     graph_.AddEdge(*edge);
   }
-  const bool in_loaded_map = UseSubmaps() && !initial_map_.Empty() && !keyframes_.empty();
+  const bool in_loaded_map = !initial_map_.Empty() && !keyframes_.empty();
   if (!initial_map_.Empty() && !in_loaded_map) AddMapAnchor(node, T_map_robot, trusted, covariance);
-  keyframes_.push_back({scan, trusted, T_map_robot, T_track_robot});
+  keyframes_.push_back({scan, trusted, T_track_robot});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
   return in_loaded_map && AnchorInLoadedMap(scan, places_.back().shapes, node, T_map_robot);
 }
@@ -387,120 +382,26 @@ void ShapeSlam::AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
   if (trusted) last_map_anchor_node_ = node;
 }
 
-// Optimises the pose graph, then brings the map to the keyframes' corrected poses when one of
-// them moved by more than rebuild_min_shift_* from where the map holds it: by a deformation when
-// every shift is small (deform_max_shift_*, not during the last optimisation), else by a rebuild.
-// The rebuild starts from the last checkpoint before the first keyframe that moved (or that a
-// deformation left approximate): keyframes before a closed loop keep their poses, and so does
-// their part of the map.
-void ShapeSlam::OptimizeAndRebuild(bool at_end) {
-  const LoopClosureParams& lc = params_.loop_closure;
-  graph_.Optimize(lc.graph);
+void ShapeSlam::Optimize() {
+  graph_.Optimize(params_.loop_closure.graph);
   ++num_optimizations_;
-  if (UseSubmaps() && !at_end) return;  // no map is rebuilt during mapping
-  int first_moved = -1;
-  double max_shift_m = 0.0, max_shift_rad = 0.0;
-  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    const Pose2 shift = keyframes_[k].T_map_robot_in_map.Inverse() * graph_.Node(places_[k].node);
-    max_shift_m = std::max(max_shift_m, shift.Translation().norm());
-    max_shift_rad = std::max(max_shift_rad, std::abs(shift.theta));
-    if (first_moved < 0 && (shift.Translation().norm() > lc.rebuild_min_shift_m ||
-                            std::abs(shift.theta) > lc.rebuild_min_shift_rad)) {
-      first_moved = static_cast<int>(k);
-    }
-  }
-  if (!at_end && first_moved >= 0 && max_shift_m <= lc.deform_max_shift_m &&
-      max_shift_rad <= lc.deform_max_shift_rad) {
-    DeformMap(first_moved);
-    return;
-  }
-  if (deformed_from_ >= 0 && (at_end || first_moved >= 0)) {
-    first_moved = first_moved < 0 ? deformed_from_ : std::min(first_moved, deformed_from_);
-  }
-  if (first_moved >= 0) RebuildFrom(first_moved);
-}
-
-// Moves every polyline last touched by a keyframe from first_moved on rigidly with it, from where
-// the map holds the keyframe to its pose in the graph. A polyline that several keyframes merged
-// into moves with the last one; within deform_max_shift_* they move alike.
-void ShapeSlam::DeformMap(int first_moved) {
-  std::vector<PointTransform> correction;
-  for (std::size_t k = first_moved; k < keyframes_.size(); ++k) {
-    const Pose2 T_map_robot = graph_.Node(places_[k].node);
-    correction.emplace_back(T_map_robot * keyframes_[k].T_map_robot_in_map.Inverse());
-    keyframes_[k].T_map_robot_in_map = T_map_robot;
-  }
-  for (const PolylineId id : map_.Ids()) {
-    if (map_.Get(id).keyframe < first_moved) continue;
-    MapPolyline polyline = map_.Get(id);
-    for (Point2& p : polyline.points) p = correction[polyline.keyframe - first_moved](p);
-    map_.Replace(id, std::move(polyline));
-  }
-  // The checkpoints after first_moved hold those keyframes where they were.
-  while (!checkpoints_.empty() && checkpoints_.back().keyframes > first_moved) checkpoints_.pop_back();
-  deformed_from_ = deformed_from_ < 0 ? first_moved : std::min(deformed_from_, first_moved);
-  ++num_deformations_;
-}
-
-void ShapeSlam::TagTouched(const MapUpdateStats& stats, int keyframe) {
-  for (const PolylineId id : stats.touched) map_.SetKeyframe(id, keyframe);
-}
-
-void ShapeSlam::RebuildFrom(int first_moved) {
-  while (!checkpoints_.empty() && checkpoints_.back().keyframes > first_moved) checkpoints_.pop_back();
-  int start = 0;
-  if (checkpoints_.empty()) {
-    map_.Restore(initial_map_.TakeSnapshot());  // empty unless mapping continues a loaded map
-  } else {
-    map_.Restore(checkpoints_.back().map);
-    start = checkpoints_.back().keyframes;
-  }
-  deformed_from_ = -1;
-  const ScanInsertionParams insertion = ToScanInsertionParams(params_);
-  ++num_rebuilds_;
-  num_reinserted_ += static_cast<long long>(keyframes_.size()) - start;
-  for (std::size_t k = start; k < keyframes_.size(); ++k) {
-    keyframes_[k].T_map_robot_in_map = KeyframePose(static_cast<int>(k));
-    TagTouched(InsertKeyframe(map_, static_cast<int>(k), insertion), static_cast<int>(k));
-    CheckpointMap(static_cast<int>(k) + 1);
-  }
-}
-
-// Keeps a copy of the map holding the first `keyframes` keyframes, every
-// rebuild_checkpoint_every keyframes.
-void ShapeSlam::CheckpointMap(int keyframes) {
-  const int every = params_.loop_closure.rebuild_checkpoint_every;
-  if (UseSubmaps() || every <= 0 || keyframes % every != 0 || deformed_from_ >= 0) return;
-  if (!checkpoints_.empty() && checkpoints_.back().keyframes >= keyframes) return;
-  checkpoints_.push_back({keyframes, map_.TakeSnapshot()});
 }
 
 void ShapeSlam::Finish() {
   const auto& edges = graph_.Edges();
   const bool has_loops =
       std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; });
-  if (UseSubmaps() && has_loops) {
-    graph_.Optimize(params_.loop_closure.graph);
-    ++num_optimizations_;
-  } else if (!UseSubmaps() && has_loops) {
-    OptimizeAndRebuild(/*at_end=*/true);
-    if (!anchors_.empty()) {
-      last_T_map_robot_ = KeyframePose(anchors_.back().keyframe) * anchors_.back().T_keyframe_robot;
-    }
-  }
-  std::vector<MapCheckpoint>().swap(checkpoints_);
+  if (has_loops) Optimize();
 }
 
 const PolylineMap& ShapeSlam::Map() const {
-  if (UseSubmaps()) {
-    const std::pair<int, int> now{static_cast<int>(keyframes_.size()), num_optimizations_};
-    if (map_made_from_ != now) BuildGlobalMap();
-    map_made_from_ = now;
-  }
+  const std::pair<int, int> now{static_cast<int>(keyframes_.size()), num_optimizations_};
+  if (map_made_from_ != now) BuildGlobalMap();
+  map_made_from_ = now;
   return map_;
 }
 
-// With submaps: every keyframe inserted (§5.2) at its optimised pose into a new map.
+// Every keyframe inserted (§5.2) at its optimised pose into the loaded map or an empty one.
 void ShapeSlam::BuildGlobalMap() const {
   map_ = initial_map_;  // empty unless mapping continues a loaded map
   const ScanInsertionParams insertion = ToScanInsertionParams(params_);
@@ -629,9 +530,9 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
   const internal::Localization& loc = registration.loc;
   LearnOdometry(prediction, loc);
-  // Poses in the tracking frame (the local frame with submaps, else the map's).
+  // Poses in the local tracking frame (the submaps').
   const Pose2 T_map_sensor = T_map_sensor_pred * loc.correction;
-  Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
+  const Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   report.matched = loc.trusted;
   report.fast_track = loc.fast_track && !report.keyframe_tracked;
   report.covariance = loc.covariance;
@@ -642,18 +543,18 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
 
   // A scan whose pose no match confirmed updates the map only where the map knows nothing yet
   // (new territory); elsewhere it would blur or duplicate what is there.
-  // With submaps and without odometry such a scan, unless its best candidate follows the
+  // Without odometry such a scan, unless its best candidate follows the
   // robot's motion, may be a keyframe all the same, the first of new submaps
   // (SubmapParams::restart_when_lost): the next scans are tracked against what it saw, and only
   // its guessed step to the previous keyframe is left for loop closure to correct.
-  registration.guessed = UseSubmaps() && params_.submaps.restart_when_lost && !loc.trusted &&
+  registration.guessed = params_.submaps.restart_when_lost && !loc.trusted &&
                          !registration.follows_motion && !registration.model_empty &&
                          !report.used_odometry;
   const bool may_update = loc.trusted || registration.model_empty || registration.guessed ||
                           loc.coverage < params_.max_untrusted_coverage;
   if (!shapes.fine.empty() && may_update &&
       (registration.guessed || IsKeyframe(T_track_robot))) {
-    T_track_robot = UpdateMapAndGraph(std::move(shapes), scan, T_map_sensor, registration, report);
+    UpdateMapAndGraph(std::move(shapes), scan, T_map_sensor, registration, report);
   }
   if (!keyframes_.empty()) {
     const int k = static_cast<int>(keyframes_.size()) - 1;
@@ -683,7 +584,7 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
     report.keyframe_tracked = r.loc.fast_track;
   }
   r.model_empty = TrackingMap().Empty();
-  if (r.model_empty && UseSubmaps() && keyframes_.empty() && !initial_map_.Empty() &&
+  if (r.model_empty && keyframes_.empty() && !initial_map_.Empty() &&
       !shapes.coarse.empty()) {
     // The first scan of a continued map (run --map): localized in the loaded map, whose frame
     // the local frame starts as; unconfirmed, it starts at the given pose.
@@ -715,13 +616,10 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
 
 // A trusted registration that the odometry did not override teaches the odometry model: what the
 // scan itself says, not the estimate the prior already pulled (ScanOwnCorrection), is one
-// sample of the increments' heading error (OdometryCalibrator) and of their noise. The
-// calibration serves the submap design only: the global one, kept for A/B until it is deleted,
-// keeps its measured behaviour (with it, 5 copies: intel odom-bad better, aces odom-bias and
-// intel worse; docs/design.md, "Calibrating the odometry's heading").
+// sample of the increments' heading error (OdometryCalibrator) and of their noise.
 void ShapeSlam::LearnOdometry(const Prediction& prediction, const internal::Localization& loc) {
   if (!prediction.odometry_delta || !loc.trusted || loc.odometry_overridden) return;
-  const bool calibrate = params_.odometry_calibration.enabled && UseSubmaps();
+  const bool calibrate = params_.odometry_calibration.enabled;
   if (!params_.odometry_noise.learn && !calibrate) return;
   const OdometryNoiseParams& noise = tracking_params_.odometry_noise;
   const std::optional<Pose2> own = ScanOwnCorrection(
@@ -761,10 +659,10 @@ void ShapeSlam::UpdateMotion(const Pose2& T_track_robot, bool reset_lost) {
   travel_m_ += (last_T_map_robot_->Translation() - T_track_robot.Translation()).norm();
 }
 
-// A keyframe updates the map (§5.2: the active submaps, or the global map of the earlier
-// design) and becomes a pose-graph node; a loop closure found then optimises the graph. Returns
-// the robot's tracking pose, which only the global design's rebuild moves.
-Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
+// A keyframe updates the active submaps (§5.2) and becomes a pose-graph node; a loop closure
+// found (or a tie to a loaded map that disagrees with the graph) then optimises the graph. The
+// local frame stays: only the keyframes' global poses move.
+void ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
                                    const Pose2& T_map_sensor, Registration& registration,
                                    ScanReport& report) {
   const internal::Localization& loc = registration.loc;
@@ -786,23 +684,12 @@ Pose2 ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   const Placement placement = trusted                ? Placement::kMatched
                               : registration.guessed ? Placement::kGuessed
                                                      : Placement::kUnconfirmed;
-  if (UseSubmaps()) {
-    report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, placement);
-  } else {
-    report.map_update =
-        UpdateMap(map_, perceived_map, T_map_sensor, visible, scan, trusted, params_.map_update);
-    TagTouched(report.map_update, static_cast<int>(keyframes_.size()));
-  }
+  report.map_update = InsertIntoSubmaps(perceived_map, T_map_sensor, visible, scan, placement);
   report.keyframe = true;
   const Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   const bool anchor_moved = AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine),
                                         T_track_robot, placement, loc.covariance);
-  CheckpointMap(static_cast<int>(keyframes_.size()));
-  if (!loop_closer_.Update(places_, graph_) && !anchor_moved) return T_track_robot;
-  OptimizeAndRebuild(/*at_end=*/false);
-  // The global map was rebuilt around the corrected keyframe: track on from there. With
-  // submaps the local frame stays; only the keyframe's global pose moved.
-  return UseSubmaps() ? T_track_robot : KeyframePose(static_cast<int>(keyframes_.size()) - 1);
+  if (loop_closer_.Update(places_, graph_) || anchor_moved) Optimize();
 }
 
 std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {

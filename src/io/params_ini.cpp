@@ -147,7 +147,6 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"map_update", "drop_min_contradictions", "... and contradicted at least this often are removed", &p.map_update.drop_min_contradictions},
       {"keyframe", "min_translation_m", "update the map after moving this far since the last update (m)", &p.keyframe.min_translation_m},
       {"keyframe", "min_rotation_rad", "... or turning this much (rad)", &p.keyframe.min_rotation_rad},
-      {"submaps", "enabled", "track each scan against local polyline submaps that loop closures never change (false: one global map, rebuilt after closures)", &p.submaps.enabled},
       {"submaps", "keyframes", "keyframes per submap (each keyframe goes into two)", &p.submaps.keyframes},
       {"submaps", "restart_when_lost", "without odometry, a scan no match confirmed is a keyframe that finishes the active submaps and starts new ones (its edge: guess_* in [loop_closure]) ...", &p.submaps.restart_when_lost},
       {"submaps", "restart_follow_m", "... unless its best candidate lies within this (m) ...", &p.submaps.restart_follow_m},
@@ -176,11 +175,6 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "sigma_floor_rad", "edge standard deviation at least (rad)", &p.loop_closure.sigma_floor_rad},
       {"loop_closure", "min_correction_m", "optimise when a loop edge disagrees with the graph by more than this (m) ...", &p.loop_closure.min_correction_m},
       {"loop_closure", "min_correction_rad", "... or this (rad)", &p.loop_closure.min_correction_rad},
-      {"loop_closure", "rebuild_min_shift_m", "after optimising, rebuild the map only if a keyframe moved more than this (m) ...", &p.loop_closure.rebuild_min_shift_m},
-      {"loop_closure", "rebuild_min_shift_rad", "... or this (rad)", &p.loop_closure.rebuild_min_shift_rad},
-      {"loop_closure", "deform_max_shift_m", "when no keyframe moved more than this (m) ...", &p.loop_closure.deform_max_shift_m},
-      {"loop_closure", "deform_max_shift_rad", "... and this (rad), deform the map instead (polylines move with their keyframe; rebuilt at the next rebuild or the end; 0: always rebuild)", &p.loop_closure.deform_max_shift_rad},
-      {"loop_closure", "rebuild_checkpoint_every", "keep a copy of the map every this many keyframes; a rebuild starts from the last one before the first keyframe that moved (0: none)", &p.loop_closure.rebuild_checkpoint_every},
       {"loop_closure", "max_correction_rad", "a closure may turn the estimate by at most this (rad) ...", &p.loop_closure.max_correction_rad},
       {"loop_closure", "max_correction_rad_per_m", "... plus this per metre of pose-graph distance (rad/m)", &p.loop_closure.max_correction_rad_per_m},
       {"loop_closure", "max_correction_m", "... and move it by at most this (m) ...", &p.loop_closure.max_correction_m},
@@ -354,7 +348,18 @@ LocalizerParams ParseLocalizerParamsIni(const std::string& text, const std::stri
     for (const Field& f : fields) {
       if (section == f.section && key == f.key) field = &f;
     }
-    if (field == nullptr) throw ConfigError(where + ": unknown key '" + key + "' in [" + section + "]");
+    if (field == nullptr) {
+      // Keys of the global-map design, deleted on 2026-12-05 (issue 22).
+      static const std::set<std::string> kRemoved = {
+          "submaps.enabled", "loop_closure.rebuild_min_shift_m",
+          "loop_closure.rebuild_min_shift_rad", "loop_closure.deform_max_shift_m",
+          "loop_closure.deform_max_shift_rad", "loop_closure.rebuild_checkpoint_every"};
+      const bool removed = kRemoved.count(full) > 0;
+      throw ConfigError(where + ": unknown key '" + key + "' in [" + section + "]" +
+                        (removed ? " (removed with the global-map design: the mapper always "
+                                   "tracks against submaps; delete the line)"
+                                 : ""));
+    }
     if (!seen.insert(full).second) throw ConfigError(where + ": " + full + " given twice");
     Assign(*field, value, where);
   }

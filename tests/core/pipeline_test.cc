@@ -191,79 +191,8 @@ TEST(PipelineTest, KeyframeTrackPlacesTheScansBetweenKeyframes) {
   ShapeSlamParams invalid;
   invalid.keyframe_track_min_fit = -0.1;
   EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
-}
-
-// A rebuild after loop closure starts from the last map checkpoint before the first keyframe
-// that moved: the trajectory agrees with the one rebuilt from an empty map every time.
-TEST(PipelineTest, RebuildFromCheckpointsAgreesWithRebuildFromScratch) {
-  const SimRun run = Simulate(5);
-  ShapeSlamParams scratch, every_keyframe;
-  scratch.submaps.enabled = every_keyframe.submaps.enabled = false;  // the global-map design
-  scratch.loop_closure.rebuild_checkpoint_every = 0;
-  every_keyframe.loop_closure.rebuild_checkpoint_every = 1;
-  ShapeSlam a(scratch), b(every_keyframe);
-  for (const LaserScan& scan : run.scans) a.Process(scan), b.Process(scan);
-  a.Finish();
-  b.Finish();
-  ASSERT_GT(b.NumLoopClosures(), 0);
-  const std::vector<StampedPose> ta = a.Trajectory(), tb = b.Trajectory();
-  ASSERT_EQ(ta.size(), tb.size());
-  double worst = 0.0;
-  for (std::size_t i = 0; i < ta.size(); ++i) {
-    worst = std::max(worst, (ta[i].pose.Translation() - tb[i].pose.Translation()).norm());
-  }
-  EXPECT_LT(worst, 0.05);
-  EXPECT_LT(EvaluateTrajectory(tb, run.truth, {}).ate_rmse_m, 0.05);
-  // Both rebuilt; the checkpoints spared re-inserting the keyframes before the first that moved.
-  ASSERT_GT(a.NumMapRebuilds(), 0);
-  ASSERT_GT(b.NumMapRebuilds(), 0);
-  EXPECT_GE(a.NumKeyframesReinserted(), a.NumMapRebuilds());
-  EXPECT_LT(b.NumKeyframesReinserted() / b.NumMapRebuilds(),
-            a.NumKeyframesReinserted() / a.NumMapRebuilds());
-  ShapeSlamParams invalid;
-  invalid.loop_closure.rebuild_checkpoint_every = -1;
-  EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
   invalid = ShapeSlamParams{};
   invalid.fast_track_min_fit = -0.1;
-  EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
-}
-
-TEST(PipelineTest, DeformingTheMapAgreesWithRebuildingIt) {
-  const SimRun run = Simulate(5);
-  ShapeSlamParams rebuild;
-  rebuild.submaps.enabled = false;  // the global-map design, which rebuilds or deforms its map
-  // Every closure optimises and every shift above 5 mm changes the map: the loop here is
-  // closed well as it goes, its corrections are small.
-  rebuild.loop_closure.min_correction_m = 0.0;
-  rebuild.loop_closure.min_correction_rad = 0.0;
-  rebuild.loop_closure.rebuild_min_shift_m = 0.005;
-  rebuild.loop_closure.rebuild_min_shift_rad = 0.001;
-  ShapeSlamParams deform = rebuild;
-  rebuild.loop_closure.deform_max_shift_m = 0.0;  // always rebuild
-  deform.loop_closure.deform_max_shift_m = 10.0;  // deform whenever it can
-  deform.loop_closure.deform_max_shift_rad = 1.0;
-  ShapeSlam a(rebuild), b(deform);
-  for (const LaserScan& scan : run.scans) a.Process(scan), b.Process(scan);
-  EXPECT_EQ(a.NumMapDeformations(), 0);
-  ASSERT_GT(b.NumMapDeformations(), 0);
-  ASSERT_GT(a.NumMapRebuilds(), 0);
-  const int rebuilds_before_end = b.NumMapRebuilds();
-  b.Finish();
-  a.Finish();
-  // The end of the log rebuilds what the deformations left approximate.
-  EXPECT_EQ(b.NumMapRebuilds(), rebuilds_before_end + 1);
-  EXPECT_LT(b.NumKeyframesReinserted(), a.NumKeyframesReinserted());
-  const std::vector<StampedPose> ta = a.Trajectory(), tb = b.Trajectory();
-  ASSERT_EQ(ta.size(), tb.size());
-  EXPECT_LT(EvaluateTrajectory(ta, run.truth, {}).ate_rmse_m, 0.05);
-  EXPECT_LT(EvaluateTrajectory(tb, run.truth, {}).ate_rmse_m, 0.05);
-  // Every map polyline was last touched by a keyframe of this run.
-  for (const PolylineId id : b.Map().Ids()) {
-    EXPECT_GE(b.Map().Get(id).keyframe, 0);
-    EXPECT_LT(b.Map().Get(id).keyframe, static_cast<int>(b.Keyframes().size()));
-  }
-  ShapeSlamParams invalid;
-  invalid.loop_closure.deform_max_shift_rad = -0.1;
   EXPECT_THROW(ShapeSlam{invalid}, std::invalid_argument);
 }
 
@@ -342,7 +271,6 @@ namespace {
 
 ShapeSlamParams SubmapParamsWith(int keyframes_per_submap) {
   ShapeSlamParams params;
-  params.submaps.enabled = true;
   params.submaps.keyframes = keyframes_per_submap;
   return params;
 }

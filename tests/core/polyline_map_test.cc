@@ -1,5 +1,5 @@
 // The polyline map's bookkeeping (polyline_map.h): ids, the vertex count, the index behind the
-// visible shape, and snapshots (what the mapper keeps to rebuild from after loop closure).
+// visible shape, and snapshots (a copy of the polylines to restore the map to).
 #include "shape_slam/polyline_map.h"
 
 #include <gtest/gtest.h>

@@ -12,6 +12,7 @@ namespace shape_slam::io {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 std::string ErrorOf(const std::string& text) {
   try {
@@ -92,6 +93,17 @@ TEST(ParamsIniTest, LocalizerRoundTripsAndItsDefaultsAreInTheDefaultIni) {
   EXPECT_FALSE(q.stages.use_odometry);
   EXPECT_EQ(FormatParamsIni(q), text);
   EXPECT_EQ(FormatParamsIni(LocalizerParams{}), FormatParamsIni(ShapeSlamParams{}));
+}
+
+// The keys of the deleted global-map design are refused with a note saying why.
+TEST(ParamsIniTest, KeysOfTheDeletedGlobalMapDesignSayWhy) {
+  for (const std::string key : {"[submaps]\nenabled = false\n",
+                                "[loop_closure]\nrebuild_checkpoint_every = 64\n",
+                                "[loop_closure]\ndeform_max_shift_m = 0.15\n"}) {
+    EXPECT_THAT(ErrorOf(key), HasSubstr("removed with the global-map design")) << key;
+  }
+  EXPECT_THAT(ErrorOf("[submaps]\nenabledd = false\n"),
+              Not(HasSubstr("removed with the global-map design")));
 }
 
 TEST(ParamsIniTest, BrokenLocalizerKeysNameTheKeyAndTheField) {
