@@ -261,7 +261,8 @@ class ShapeSlam {
   /// the starting map, kept and extended by the new scans like a map the mapper built itself
   /// (its polylines are merged with what the new scans see, §5.2). It is a frozen submap: the
   /// new scans are tracked against submaps of their own, and every keyframe is registered
-  /// against it at its global pose (by shape without a guess from there, §4.3). Its frame is
+  /// against it at its pose in the graph (the drive since the last keyframe registered there
+  /// as the prior; verified by [loop_closure] min_inlier_ratio). Its frame is
   /// a fixed node of the pose graph, to which a keyframe so registered is tied by a robust
   /// edge, so that loop closures among the new keyframes keep them in that frame. The first
   /// scan is predicted at `T_map_robot_first` (the Localizer's global search or a known pose)
@@ -377,7 +378,7 @@ class ShapeSlam {
   void LearnOdometry(const Prediction& prediction, const internal::Localization& loc);
   void LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction);
   void UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
-                          Registration& registration, ScanReport& report);
+                         Registration& registration, ScanReport& report);
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,

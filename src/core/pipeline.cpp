@@ -284,8 +284,7 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   // Along a corridor that the two views cannot place, the step is only as certain as the
   // prediction: with odometry it held the tracking there; without, the edge is widened, so
   // that a loop closure corrects a slide without bending the rest of the path.
-  const bool widen = odometry_.status != OdometryStatus::kUsed &&
-                     lc.ridge_max_shift_m > 0.0;
+  const bool widen = odometry_.status != OdometryStatus::kUsed && lc.ridge_max_shift_m > 0.0;
   // One model for the fit check and the ridge (its open ends only prepared when widening).
   const internal::ModelIcp check(prev_fine, params_.matcher.inlier_distance_m,
                                  params_.matcher.inlier_distance_m,
@@ -316,16 +315,19 @@ bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
     edge->to = node;
     graph_.AddEdge(*edge);
   }
-  const bool in_loaded_map = !initial_map_.Empty() && !keyframes_.empty();
-  if (!initial_map_.Empty() && !in_loaded_map) AddMapAnchor(node, T_map_robot, trusted, covariance);
+  // Continuing a loaded map: the first keyframe was placed in it (Register), the later ones are
+  // registered in it here.
+  const bool continued = !initial_map_.Empty(), first = keyframes_.empty();
+  if (continued && first) AddMapAnchor(node, T_map_robot, trusted, covariance);
   keyframes_.push_back({scan, trusted, T_track_robot});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
-  return in_loaded_map && AnchorInLoadedMap(scan, places_.back().shapes, node, T_map_robot);
+  return continued && !first && AnchorInLoadedMap(scan, places_.back().shapes, node, T_map_robot);
 }
 
 // The scan registered against the loaded map (run --map) from a predicted sensor pose in its
-// frame: by shape without a guess from there (§4.3), as a scan without odometry is, the
-// prediction being the constant-velocity hint.
+// frame. With `drive` (the motion since the pose was last confirmed there) as an odometry
+// prediction is: its prior and gate; without, by shape without a guess (§4.3) as a scan without
+// odometry is, the prediction standing for the constant-velocity hint.
 internal::Localization ShapeSlam::LocalizeInLoadedMap(const ScanShapes& shapes,
                                                       const LaserScan& scan,
                                                       const Pose2& T_map_sensor_pred,
@@ -336,11 +338,11 @@ internal::Localization ShapeSlam::LocalizeInLoadedMap(const ScanShapes& shapes,
     model.map.push_back(v.points_sensor);
   }
   model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
-  return internal::Localize(shapes, model, drive, drive ? std::nullopt : std::optional<Pose2>(Pose2()),
-                            0, tracking_params_);
+  const std::optional<Pose2> hint = drive ? std::nullopt : std::optional<Pose2>(Pose2());
+  return internal::Localize(shapes, model, drive, hint, /*lost_scans=*/0, tracking_params_);
 }
 
-// With submaps the loaded map is a frozen submap in the map frame (node 0): every keyframe after
+// The loaded map is a frozen submap in the map frame (node 0): every keyframe after
 // the first is registered against it at its global pose, and a trusted registration ties the
 // keyframe to node 0 (a loop edge, so robust), as a loop closure against a finished submap
 // would. The prediction is the graph's pose, its prior the drive since the last keyframe so tied
@@ -363,13 +365,12 @@ bool ShapeSlam::AnchorInLoadedMap(const LaserScan& scan, const ScanShapes& shape
   return c.Translation().norm() > lc.min_correction_m || std::abs(c.theta) > lc.min_correction_rad;
 }
 
-// A continued map: the loaded map is not in the graph, node 0 stands for its frame. A keyframe
-// whose match was trusted is tied to node 0 by its pose (a loop edge, so robust), and the first
-// keyframe always (weakly when unconfirmed): a loop closure among the new keyframes must then
+// A continued map: node 0 stands for the loaded map's frame. A keyframe registered in the map is
+// tied to node 0 by its pose there (a loop edge, so robust), and the first keyframe always
+// (weakly when the map did not confirm it): a loop closure among the new keyframes must then
 // not pull them away from the map they were localized in, and the graph has one fixed node.
 void ShapeSlam::AddMapAnchor(int node, const Pose2& T_map_robot, bool trusted,
                              const Eigen::Matrix3d& covariance) {
-  if (!trusted && !keyframes_.empty()) return;
   PoseGraphEdge anchor;
   anchor.from = 0;
   anchor.to = node;
@@ -584,8 +585,7 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
     report.keyframe_tracked = r.loc.fast_track;
   }
   r.model_empty = TrackingMap().Empty();
-  if (r.model_empty && keyframes_.empty() && !initial_map_.Empty() &&
-      !shapes.coarse.empty()) {
+  if (r.model_empty && keyframes_.empty() && !initial_map_.Empty() && !shapes.coarse.empty()) {
     // The first scan of a continued map (run --map): localized in the loaded map, whose frame
     // the local frame starts as; unconfirmed, it starts at the given pose.
     r.loc = LocalizeInLoadedMap(shapes, scan, T_map_sensor_pred, std::nullopt);
@@ -663,8 +663,8 @@ void ShapeSlam::UpdateMotion(const Pose2& T_track_robot, bool reset_lost) {
 // found (or a tie to a loaded map that disagrees with the graph) then optimises the graph. The
 // local frame stays: only the keyframes' global poses move.
 void ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
-                                   const Pose2& T_map_sensor, Registration& registration,
-                                   ScanReport& report) {
+                                  const Pose2& T_map_sensor, Registration& registration,
+                                  ScanReport& report) {
   const internal::Localization& loc = registration.loc;
   std::vector<VisiblePolyline>& visible = registration.visible;
   std::vector<Polyline> perceived_map;
