@@ -65,6 +65,7 @@ struct LocalizeOutput {
   int lost_events = 0, recovered_events = 0;
   std::size_t status_counts[4] = {0, 0, 0, 0};
   double processing_s = 0.0;
+  double heading_per_m = 0.0, heading_per_rad = 0.0;  // learned (OdometryCalibrator)
 };
 
 constexpr const char* kStatusHeader =
@@ -112,6 +113,8 @@ LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& 
   progress.Finish();
   out.scans = scans.size();
   out.processing_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  out.heading_per_m = localizer.OdometryCalibration().HeadingPerMetre();
+  out.heading_per_rad = localizer.OdometryCalibration().HeadingPerRadian();
   return out;
 }
 
@@ -140,6 +143,8 @@ std::string StatsJson(const LocalizeOutput& out, const std::string& map_path,
     json.Key(ToString(static_cast<LocalizerStatus>(s))).Value(out.status_counts[s]);
   }
   json.EndObject();
+  json.Key("odometry").BeginObject().Key("heading_per_m").Value(out.heading_per_m);
+  json.Key("heading_per_rad").Value(out.heading_per_rad).EndObject();
   json.Key("log").BeginObject().Key("path").Value(reader.Path()).Key("format").Value(reader.Format());
   json.Key("skipped_records").Value(reader.Stats().skipped_records).EndObject();
   json.EndObject();

@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "shape_slam/motion_model.h"
+#include "shape_slam/odometry_noise.h"
 #include "shape_slam/pipeline.h"
 #include "shape_slam/polyline_map.h"
 #include "shape_slam/types.h"
@@ -153,6 +154,9 @@ class Localizer {
 
   const PolylineMap& Map() const { return map_; }
   const LocalizerParams& Params() const { return params_; }
+  /// The odometry's heading error learned from the tracked scans (stages.odometry_calibration,
+  /// as the mapper learns it) and taken out of each increment before it predicts a scan.
+  const OdometryCalibrator& OdometryCalibration() const { return odometry_calibrator_; }
 
  private:
   struct Hypothesis {
@@ -177,6 +181,8 @@ class Localizer {
     double fit = 0.0;
     double explained = 0.0;  // samples explained: fit times the number of samples
     bool trusted = false;
+    Pose2 correction;        // of the prediction (sensor frame), and its covariance
+    Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   };
   // What only the tracked pose gets (TrackPose): its recent scan, the visible map without what
   // the scan saw through (with odometry), and the retry's wider occlusion tolerance.
@@ -200,7 +206,10 @@ class Localizer {
   LocalizerReport Search(const ScanShapes& shapes, const LaserScan& scan,
                          const std::optional<Pose2>& odometry_delta);
   LocalizerReport TrackPose(const ScanShapes& shapes, const LaserScan& scan,
-                            const std::optional<Pose2>& odometry_delta);
+                            const std::optional<Pose2>& raw_odometry_delta);
+  std::optional<Pose2> Calibrated(const std::optional<Pose2>& raw_odometry_delta) const;
+  void LearnOdometry(const Pose2& raw_odometry_delta, const Pose2& odometry_delta,
+                     const Verified& v);
   std::vector<Point2> GlobalSamples(const ScanShapes& shapes) const;
   bool RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
                         const std::optional<Pose2>& odometry_delta, Verified& v);
@@ -226,6 +235,7 @@ class Localizer {
   std::optional<Pose2> last_T_odom_robot_;
   std::optional<Pose2> first_T_odom_robot_;
   bool odometry_moved_ = false;
+  OdometryCalibrator odometry_calibrator_;
 };
 
 /// Where a log starts in a finished map (`shape-slam run --map`, then ShapeSlam's constructor

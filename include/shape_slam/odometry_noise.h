@@ -47,7 +47,7 @@ struct OdometryNoiseParams {
 /// travelled; either bends a whole trajectory. The trusted registrations' heading corrections
 /// of the odometry's predictions measure both, and the next increments are corrected by them.
 struct OdometryCalibrationParams {
-  bool enabled = true;    ///< read by the submap design (the global one keeps raw increments)
+  bool enabled = true;    ///< read by the mapper and the localizer
   int window = 300;       ///< the last this many registrations count
   int min_samples = 30;   ///< no correction before this many are in
   /// A coefficient t of its standard errors from zero is applied shrunk by (1 - (min_t/t)^2),

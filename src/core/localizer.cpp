@@ -133,7 +133,8 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
     : params_(Validated(params)),
       map_(std::move(map)),
       walls_(MapWalls(map_)),
-      global_search_(walls_, GlobalSearchParams(params_)) {}
+      global_search_(walls_, GlobalSearchParams(params_)),
+      odometry_calibrator_(params_.stages.odometry_calibration) {}
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   hypotheses_ = {Hypothesis(T_map_robot, 1.0, 0.0, params_.stages.motion_model)};
@@ -155,6 +156,27 @@ std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan) {
                     std::abs(moved.theta) > kUnchanged;
   if (!odometry_moved_ || !last_T_odom_robot_) return std::nullopt;
   return last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+}
+
+// The raw increment with the learned heading error taken out (OdometryCalibrator).
+std::optional<Pose2> Localizer::Calibrated(const std::optional<Pose2>& raw_odometry_delta) const {
+  if (!raw_odometry_delta) return std::nullopt;
+  return odometry_calibrator_.Correct(*raw_odometry_delta);
+}
+
+// A scan the tracked pose matched teaches the calibration as in the mapper (ShapeSlam::
+// LearnOdometry): the scan's own heading correction (without the prior's pull) plus what the
+// calibration added is one sample of the raw increment's heading error.
+void Localizer::LearnOdometry(const Pose2& raw_odometry_delta, const Pose2& odometry_delta,
+                              const Verified& v) {
+  if (!params_.stages.odometry_calibration.enabled) return;
+  const OdometryNoiseParams& noise = params_.stages.odometry_noise;
+  const std::optional<Pose2> own =
+      ScanOwnCorrection(v.correction, v.covariance, OdometryCovariance(odometry_delta, noise),
+                        noise.learn_max_scan_sigma_m, noise.learn_max_scan_sigma_rad);
+  if (!own) return;
+  odometry_calibrator_.Add(raw_odometry_delta,
+                           odometry_delta.theta - raw_odometry_delta.theta + own->theta);
 }
 
 // One hypothesis through one scan: the per-scan localization of the mapper (candidates from
@@ -197,6 +219,8 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
       internal::AlignmentSamples(shapes.fine, p.matcher.alignment.sample_spacing_m);
   verified.fit = loc.trusted ? loc.inlier_ratio : 0.0;
   verified.trusted = loc.trusted && loc.inlier_ratio >= min_fit;
+  verified.correction = loc.correction;
+  verified.covariance = loc.covariance;
   verified.explained = verified.fit * static_cast<double>(samples.size());
   return verified;
 }
@@ -321,7 +345,8 @@ double Localizer::TrackingMinFit() const {
 // Localized: the one pose is tracked; too many scans without a trusted match, or a fit that
 // stays far below its running mean, mean the robot is lost (or was carried away).
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
-                                     const std::optional<Pose2>& odometry_delta) {
+                                     const std::optional<Pose2>& raw_odometry_delta) {
+  const std::optional<Pose2> odometry_delta = Calibrated(raw_odometry_delta);
   Hypothesis& h = hypotheses_.front();
   TrackingAids aids;
   aids.recent = recent_ ? &*recent_ : nullptr;
@@ -345,6 +370,7 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
   drop_scans_ = dropped ? drop_scans_ + 1 : 0;
   if (v.trusted && !dropped) {
+    if (odometry_delta) LearnOdometry(*raw_odometry_delta, *odometry_delta, v);
     fit_mean_ = fit_mean_ < 0.0 ? v.fit
                                 : (1.0 - params_.fit_mean_weight) * fit_mean_ +
                                       params_.fit_mean_weight * v.fit;
@@ -454,10 +480,10 @@ LocalizerReport Localizer::Process(const LaserScan& input_scan) {
   ValidateScan(input_scan);
   const LaserScan scan = CounterClockwiseScan(input_scan);
   const ScanShapes shapes = ExtractScanShapes(scan, params_.stages.shapes);
-  const std::optional<Pose2> odometry_delta = OdometryDelta(scan);
+  const std::optional<Pose2> raw_odometry_delta = OdometryDelta(scan);
   LocalizerReport report = status_ == LocalizerStatus::kTracking
-                               ? TrackPose(shapes, scan, odometry_delta)
-                               : Search(shapes, scan, odometry_delta);
+                               ? TrackPose(shapes, scan, raw_odometry_delta)
+                               : Search(shapes, scan, Calibrated(raw_odometry_delta));
   report.timestamp_s = scan.timestamp_s;
   if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
   return report;

@@ -309,6 +309,37 @@ TEST(LocalizerTest, AWallTheScansSeeThroughHidesNothingWhileTracking) {
   ExpectTrackingHoldsOnlyWith(SceneMap(world), with, without, run);
 }
 
+// The localizer learns the odometry's heading error as the mapper does (OdometryCalibrator):
+// 2 deg per metre more of wheel-base bias is 2 deg per metre more of learned correction, the
+// other way; with the calibration off nothing is learned.
+TEST(LocalizerTest, TheOdometrysHeadingErrorIsLearned) {
+  const SimRun clean = Simulate(0, 250, 7);
+  const double bias = 2.0 * M_PI / 180.0;
+  SimRun biased = clean;
+  Pose2 previous_raw = *clean.scans[0].T_odom_robot, faulty = previous_raw;
+  for (std::size_t i = 1; i < biased.scans.size(); ++i) {
+    const Pose2 raw = *clean.scans[i].T_odom_robot;
+    Pose2 step = previous_raw.Inverse() * raw;
+    step.theta += bias * step.Translation().norm();
+    faulty = faulty * step;
+    previous_raw = raw;
+    biased.scans[i].T_odom_robot = faulty;
+  }
+  const auto learned = [](const SimRun& run, bool enabled) {
+    LocalizerParams params;
+    params.stages.odometry_calibration.enabled = enabled;
+    Localizer localizer(SceneMap(testing::LoopWorld()), params);
+    localizer.SetInitialPose(run.truth[0]);
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "scan " << i;
+    }
+    return localizer.OdometryCalibration().HeadingPerMetre();
+  };
+  EXPECT_NEAR(learned(biased, true) - learned(clean, true), -bias, 0.25 * bias);
+  EXPECT_EQ(learned(biased, false), 0.0);
+}
+
 TEST(LocalizerTest, IsDeterministic) {
   const SimRun run = Simulate(1, 15, 5);
   Localizer a(SceneMap(testing::LoopWorld())), b(SceneMap(testing::LoopWorld()));
