@@ -25,6 +25,9 @@
 #include "shape_slam/types.h"
 
 namespace shape_slam {
+namespace internal {
+struct ModelSegment;  // internal/model_segments.h
+}  // namespace internal
 
 struct WindowSearchParams {
   /// Cell size of the likelihood field, metres. Coarser is faster; the result is refined later.
@@ -124,6 +127,9 @@ class WindowSearch {
     std::vector<std::array<int, 4>> boxes_;
     std::vector<double> rotation_penalty_;
   };
+  std::vector<std::uint8_t> LikelihoodField(const std::vector<internal::ModelSegment>& segments,
+                                            double reach_m) const;
+  void BuildPyramid(std::vector<std::uint8_t> field);
   int LevelValue(int level, int ix, int iy) const;
   std::vector<int> RotatedCells(const std::vector<Point2>& samples_scan, const Pose2& centre,
                                 int rotations, int half_rotations, double step_rad) const;

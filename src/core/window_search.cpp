@@ -85,7 +85,13 @@ WindowSearch::WindowSearch(const std::vector<Polyline>& model, const WindowSearc
   nx_ = static_cast<int>(std::ceil((hi.x() - origin_.x() + reach_m) / resolution_m_)) + pad;
   ny_ = static_cast<int>(std::ceil((hi.y() - origin_.y() + reach_m) / resolution_m_)) + pad;
 
-  // Level 0: the likelihood field, 255 on a polyline.
+  BuildPyramid(LikelihoodField(segments, reach_m));
+}
+
+// The likelihood field over the grid (level 0): 255 on a polyline, falling off as a Gaussian
+// of hit_sigma_m within reach_m of it.
+std::vector<std::uint8_t> WindowSearch::LikelihoodField(
+    const std::vector<internal::ModelSegment>& segments, double reach_m) const {
   std::vector<std::uint8_t> field(static_cast<std::size_t>(nx_) * ny_, 0);
   const double inv_two_sigma2 = 1.0 / (2.0 * params_.hit_sigma_m * params_.hit_sigma_m);
   // The squared distance beyond which a segment cannot raise a cell holding c (its value would
@@ -114,9 +120,13 @@ WindowSearch::WindowSearch(const std::vector<Polyline>& model, const WindowSearc
       }
     }
   }
-  // Level k: the maximum over the 2^k x 2^k cells from (ix, iy) up, so that its value bounds
-  // every translation of a node 2^k cells wide. Cells past the grid count 0; the maximum is
-  // taken along x, then along y (the same maximum, in loops the compiler vectorises).
+  return field;
+}
+
+// Level 0 is the field; level k the maximum over the 2^k x 2^k cells from (ix, iy) up, so that
+// its value bounds every translation of a node 2^k cells wide. Cells past the grid count 0; the
+// maximum is taken along x, then along y (the same maximum, in loops the compiler vectorises).
+void WindowSearch::BuildPyramid(std::vector<std::uint8_t> field) {
   pyramid_.push_back(std::move(field));
   const std::size_t w = static_cast<std::size_t>(nx_);
   std::vector<std::uint8_t> along_x(pyramid_.back().size());
