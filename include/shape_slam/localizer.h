@@ -233,8 +233,7 @@ class Localizer {
   int challenger_scans_ = 0;              // scans it has stayed so
   double fit_mean_ = 0.0;
   std::optional<Pose2> last_T_odom_robot_;
-  std::optional<Pose2> first_T_odom_robot_;
-  bool odometry_moved_ = false;
+  OdometryMotionCheck odometry_motion_;
   OdometryCalibrator odometry_calibrator_;
 };
 

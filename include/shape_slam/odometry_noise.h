@@ -70,6 +70,12 @@ class OdometryCalibrator {
   /// One registration: the raw increment, and the heading the robot turned beyond it (the
   /// scan's own correction plus what Correct added).
   void Add(const Pose2& odometry_delta, double heading_error_rad);
+  /// One registration of a scan predicted by Correct(raw_delta) = `corrected_delta`: the heading
+  /// error is the scan's own correction (ScanOwnCorrection) plus what Correct added.
+  void AddRegistration(const Pose2& raw_delta, const Pose2& corrected_delta,
+                       const Pose2& scan_own_correction) {
+    Add(raw_delta, corrected_delta.theta - raw_delta.theta + scan_own_correction.theta);
+  }
   double HeadingPerMetre() const { return per_m_; }
   double HeadingPerRadian() const { return per_rad_; }
 
@@ -98,6 +104,13 @@ std::optional<Pose2> ScanOwnCorrection(const Pose2& fused_correction,
                                        const Eigen::Matrix3d& prior_covariance, double max_sigma_m,
                                        double max_sigma_rad);
 
+/// ScanOwnCorrection of a registration whose prior was the odometry increment `odometry_delta`
+/// under `noise` (OdometryCovariance), within noise.learn_max_scan_sigma_*.
+std::optional<Pose2> ScanOwnCorrection(const Pose2& fused_correction,
+                                       const Eigen::Matrix3d& fused_covariance,
+                                       const Pose2& odometry_delta,
+                                       const OdometryNoiseParams& noise);
+
 /// The noise model scaled to the log: each trusted registration's correction of the odometry
 /// prediction, normalised by the configured model's sigmas, is one sample; the scale of the
 /// translation (rotation) sigmas is the one that makes the median of the last learn_window
@@ -118,6 +131,18 @@ class OdometryNoiseLearner {
   std::vector<double> xy2_, theta2_;  // ring buffers of squared normalised corrections
   int next_ = 0;
   double scale_xy_ = 1.0, scale_theta_ = 1.0;
+};
+
+/// Odometry that has not moved since the first scan is no odometry (logs without any carry
+/// zeros). Moved is false until a pose differs from the first one seen beyond rounding, then
+/// true for good.
+class OdometryMotionCheck {
+ public:
+  bool Moved(const Pose2& T_odom_robot);
+
+ private:
+  std::optional<Pose2> first_;
+  bool moved_ = false;
 };
 
 }  // namespace shape_slam

@@ -418,7 +418,7 @@ class ShapeSlam {
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
   std::optional<Pose2> last_T_odom_robot_;
-  std::optional<Pose2> first_T_odom_robot_;  // odometry equal to this all along is none
+  OdometryMotionCheck odometry_motion_;  // odometry that never moved is none
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
   OdometryCalibrator odometry_calibrator_;  // the log's odometry heading error

@@ -107,6 +107,14 @@ VisibilityParams ModelVisibility(const LaserScan& scan, bool no_estimate,
   return visibility;
 }
 
+LocalModel VisibleModel(const std::vector<VisiblePolyline>& visible,
+                        const VisibilityParams& visibility) {
+  LocalModel model;
+  for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
+  model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
+  return model;
+}
+
 // The window search's hypotheses around a centre, in a window scaled by `scale`.
 std::vector<Pose2> WindowCandidates(const std::vector<Polyline>& model,
                                     const std::vector<Point2>& samples, const Pose2& centre,

@@ -69,18 +69,12 @@ WindowSearchParams GlobalSearchParams(const LocalizerParams& params) {
 // internal::ModelVisibility); with `seen`, without what the scan saw through, and with the
 // occlusion tolerance at least depth_tolerance_m. The tracked pose's recent scan is added by
 // Track.
-internal::LocalModel VisibleModel(const PolylineMap& map, const LaserScan& scan,
-                                  const Pose2& T_map_sensor, bool all_around,
-                                  const ShapeSlamParams& p, double depth_tolerance_m,
-                                  const SeenRays* seen) {
+internal::LocalModel ModelAt(const PolylineMap& map, const LaserScan& scan,
+                             const Pose2& T_map_sensor, bool all_around, const ShapeSlamParams& p,
+                             double depth_tolerance_m, const SeenRays* seen) {
   VisibilityParams visibility = internal::ModelVisibility(scan, all_around, p);
   visibility.depth_tolerance_m = std::max(visibility.depth_tolerance_m, depth_tolerance_m);
-  internal::LocalModel model;
-  for (const VisiblePolyline& v : map.Visible(T_map_sensor, visibility, seen)) {
-    model.map.push_back(v.points_sensor);
-  }
-  model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
-  return model;
+  return internal::VisibleModel(map.Visible(T_map_sensor, visibility, seen), visibility);
 }
 
 bool Near(const Pose2& a, const Pose2& b, const LocalizerParams& params) {
@@ -149,12 +143,7 @@ void Localizer::SetInitialPose(const Pose2& T_map_robot) {
 // Odometry that never moved since the first scan is none (as in the mapper).
 std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan) {
   if (!params_.stages.use_odometry || !scan.T_odom_robot) return std::nullopt;
-  if (!first_T_odom_robot_) first_T_odom_robot_ = scan.T_odom_robot;
-  const Pose2 moved = first_T_odom_robot_->Inverse() * *scan.T_odom_robot;
-  constexpr double kUnchanged = 1e-9;
-  odometry_moved_ = odometry_moved_ || moved.Translation().norm() > kUnchanged ||
-                    std::abs(moved.theta) > kUnchanged;
-  if (!odometry_moved_ || !last_T_odom_robot_) return std::nullopt;
+  if (!odometry_motion_.Moved(*scan.T_odom_robot) || !last_T_odom_robot_) return std::nullopt;
   return last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
 }
 
@@ -170,13 +159,9 @@ std::optional<Pose2> Localizer::Calibrated(const std::optional<Pose2>& raw_odome
 void Localizer::LearnOdometry(const Pose2& raw_odometry_delta, const Pose2& odometry_delta,
                               const Verified& v) {
   if (!params_.stages.odometry_calibration.enabled) return;
-  const OdometryNoiseParams& noise = params_.stages.odometry_noise;
-  const std::optional<Pose2> own =
-      ScanOwnCorrection(v.correction, v.covariance, OdometryCovariance(odometry_delta, noise),
-                        noise.learn_max_scan_sigma_m, noise.learn_max_scan_sigma_rad);
-  if (!own) return;
-  odometry_calibrator_.Add(raw_odometry_delta,
-                           odometry_delta.theta - raw_odometry_delta.theta + own->theta);
+  const std::optional<Pose2> own = ScanOwnCorrection(v.correction, v.covariance, odometry_delta,
+                                                     params_.stages.odometry_noise);
+  if (own) odometry_calibrator_.AddRegistration(raw_odometry_delta, odometry_delta, *own);
 }
 
 // One hypothesis through one scan: the per-scan localization of the mapper (candidates from
@@ -201,8 +186,8 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   if (shapes.coarse.empty()) return verified;
   std::optional<SeenRays> seen;
   if (aids.see_through) seen = SeenRaysOf(scan, params_.see_through_margin_m);
-  internal::LocalModel model = VisibleModel(map_, scan, T_map_sensor_pred, !odometry_delta, p,
-                                            aids.depth_tolerance_m, seen ? &*seen : nullptr);
+  internal::LocalModel model = ModelAt(map_, scan, T_map_sensor_pred, !odometry_delta, p,
+                                       aids.depth_tolerance_m, seen ? &*seen : nullptr);
   if (aids.recent != nullptr && p.use_last_keyframe) {
     const Pose2 T_pred_recent = T_map_sensor_pred.Inverse() * aids.recent->T_map_sensor;
     for (const Polyline& c : aids.recent->shapes.coarse) {

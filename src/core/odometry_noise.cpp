@@ -70,6 +70,15 @@ std::optional<Pose2> ScanOwnCorrection(const Pose2& fused_correction,
   return Pose2(own.x(), own.y(), own.z());
 }
 
+std::optional<Pose2> ScanOwnCorrection(const Pose2& fused_correction,
+                                       const Eigen::Matrix3d& fused_covariance,
+                                       const Pose2& odometry_delta,
+                                       const OdometryNoiseParams& noise) {
+  return ScanOwnCorrection(fused_correction, fused_covariance,
+                           OdometryCovariance(odometry_delta, noise), noise.learn_max_scan_sigma_m,
+                           noise.learn_max_scan_sigma_rad);
+}
+
 Eigen::Matrix3d OdometryCovariance(const Pose2& delta, const OdometryNoiseParams& noise) {
   const double distance = delta.Translation().norm();
   const double turn = std::abs(delta.theta);
@@ -181,6 +190,15 @@ void OdometryCalibrator::Fit() {
   };
   per_m_ = significant(0, params_.max_per_m);
   per_rad_ = significant(1, params_.max_per_rad);
+}
+
+bool OdometryMotionCheck::Moved(const Pose2& T_odom_robot) {
+  if (moved_) return true;
+  if (!first_) first_ = T_odom_robot;
+  const Pose2 moved = first_->Inverse() * T_odom_robot;
+  constexpr double kUnchanged = 1e-9;  // metres, radians: the same pose up to rounding
+  moved_ = moved.Translation().norm() > kUnchanged || std::abs(moved.theta) > kUnchanged;
+  return moved_;
 }
 
 }  // namespace shape_slam

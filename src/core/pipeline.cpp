@@ -164,14 +164,11 @@ void ShapeSlam::TrackOdometry(const LaserScan& scan) {
   ++odometry_.scans;
   if (!scan.T_odom_robot) return;
   ++odometry_.scans_with_odometry;
-  if (!first_T_odom_robot_) first_T_odom_robot_ = scan.T_odom_robot;
   if (odometry_.status == OdometryStatus::kDisabled || odometry_.status == OdometryStatus::kUsed) {
     return;
   }
-  const Pose2 moved = first_T_odom_robot_->Inverse() * *scan.T_odom_robot;
-  constexpr double kUnchanged = 1e-9;  // metres, radians: the same pose up to rounding
-  const bool unchanged = moved.Translation().norm() <= kUnchanged && std::abs(moved.theta) <= kUnchanged;
-  odometry_.status = unchanged ? OdometryStatus::kConstant : OdometryStatus::kUsed;
+  odometry_.status = odometry_motion_.Moved(*scan.T_odom_robot) ? OdometryStatus::kUsed
+                                                                : OdometryStatus::kConstant;
 }
 
 ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
@@ -333,11 +330,8 @@ internal::Localization ShapeSlam::LocalizeInLoadedMap(const ScanShapes& shapes,
                                                       const Pose2& T_map_sensor_pred,
                                                       const std::optional<Pose2>& drive) const {
   const VisibilityParams visibility = internal::ModelVisibility(scan, /*no_estimate=*/true, params_);
-  internal::LocalModel model;
-  for (const VisiblePolyline& v : initial_map_.Visible(T_map_sensor_pred, visibility)) {
-    model.map.push_back(v.points_sensor);
-  }
-  model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
+  const internal::LocalModel model =
+      internal::VisibleModel(initial_map_.Visible(T_map_sensor_pred, visibility), visibility);
   const std::optional<Pose2> hint = drive ? std::nullopt : std::optional<Pose2>(Pose2());
   return internal::Localize(shapes, model, drive, hint, /*lost_scans=*/0, tracking_params_);
 }
@@ -455,9 +449,7 @@ internal::Localization ShapeSlam::LocalizeAt(const ScanShapes& shapes, const Las
                                              std::vector<VisiblePolyline>& visible) const {
   const VisibilityParams visibility = internal::ModelVisibility(scan, !odometry_delta, params_);
   visible = TrackingMap().Visible(T_map_sensor_pred, visibility);
-  internal::LocalModel model;
-  for (const VisiblePolyline& v : visible) model.map.push_back(v.points_sensor);
-  model.map_cyclic = visibility.fov_rad >= 2.0 * M_PI - 1e-9;
+  internal::LocalModel model = internal::VisibleModel(visible, visibility);
   if (params_.use_last_keyframe && !keyframes_.empty()) {
     model.recent_coarse = LastKeyframeIn(places_.back().shapes.coarse, T_map_sensor_pred);
     model.recent_fine = recent_fine.empty()
@@ -621,14 +613,12 @@ void ShapeSlam::LearnOdometry(const Prediction& prediction, const internal::Loca
   if (!prediction.odometry_delta || !loc.trusted || loc.odometry_overridden) return;
   const bool calibrate = params_.odometry_calibration.enabled;
   if (!params_.odometry_noise.learn && !calibrate) return;
-  const OdometryNoiseParams& noise = tracking_params_.odometry_noise;
   const std::optional<Pose2> own = ScanOwnCorrection(
-      loc.correction, loc.covariance, OdometryCovariance(*prediction.odometry_delta, noise),
-      noise.learn_max_scan_sigma_m, noise.learn_max_scan_sigma_rad);
+      loc.correction, loc.covariance, *prediction.odometry_delta, tracking_params_.odometry_noise);
   if (!own) return;
   if (calibrate) {
-    const Pose2& raw = *prediction.raw_odometry_delta;
-    odometry_calibrator_.Add(raw, prediction.odometry_delta->theta - raw.theta + own->theta);
+    odometry_calibrator_.AddRegistration(*prediction.raw_odometry_delta,
+                                         *prediction.odometry_delta, *own);
     odometry_.heading_per_m = odometry_calibrator_.HeadingPerMetre();
     odometry_.heading_per_rad = odometry_calibrator_.HeadingPerRadian();
   }

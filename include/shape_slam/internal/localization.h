@@ -53,6 +53,11 @@ struct Localization {
 VisibilityParams ModelVisibility(const LaserScan& scan, bool no_estimate,
                                  const ShapeSlamParams& params);
 
+/// The registration model of a map's visible shape (§3), as PolylineMap::Visible gives it with
+/// `visibility`: its polylines in the sensor frame of the prediction, cyclic when seen all around.
+LocalModel VisibleModel(const std::vector<VisiblePolyline>& visible,
+                        const VisibilityParams& visibility);
+
 /// Candidates from shape matching against the map and against the last keyframe, the
 /// prediction and (without odometry) the window search, ranked by the candidate selection and
 /// refined in that order. `lost_scans`: consecutive scans before this one that found no trusted
