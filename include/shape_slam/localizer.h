@@ -117,6 +117,12 @@ struct LocalizerParams {
   int off_map_search_every = 10;
   double off_map_margin = 0.2;
   int off_map_confirm_scans = 3;
+  /// Where a log starts in a map (LocalizeFirstScan, run --map without --initial): the first
+  /// localized pose counts once this many more scans have been matched after it with the
+  /// tracking never lost in between (0: at once). A pose found by the global search alone can
+  /// be a look-alike place, whose tracking then fails within a few scans; a continued map built
+  /// on it is wrong for good (aces two sessions, one copy of five: 16 m ATE).
+  int first_pose_confirm_scans = 3;
 
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;
@@ -244,8 +250,10 @@ struct FirstPose {
   Pose2 T_map_robot;     ///< its pose in the map
 };
 
-/// Runs scans[0, max_scans) through a Localizer of `map` and returns the first scan it
-/// localizes, or nullopt when none of them is. Throws std::invalid_argument for invalid params,
+/// Runs the scans through a Localizer of `map` and returns the first scan of [0, max_scans) it
+/// localizes and then confirms (LocalizerParams::first_pose_confirm_scans; the confirming scans
+/// may lie beyond max_scans; at the log's end an unconfirmed pose still counts), or nullopt
+/// when none is. Throws std::invalid_argument for invalid params,
 /// an empty map or a malformed scan.
 std::optional<FirstPose> LocalizeFirstScan(const PolylineMap& map,
                                            const std::vector<LaserScan>& scans,

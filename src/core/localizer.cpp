@@ -110,6 +110,9 @@ void LocalizerParams::Validate() const {
   if (off_map_confirm_scans < 0) {
     throw std::invalid_argument("LocalizerParams::off_map_confirm_scans must be >= 0");
   }
+  if (first_pose_confirm_scans < 0) {
+    throw std::invalid_argument("LocalizerParams::first_pose_confirm_scans must be >= 0");
+  }
   InRange(off_map_margin, 0.0, 1.0, "LocalizerParams::off_map_margin");
 }
 
@@ -478,11 +481,21 @@ std::optional<FirstPose> LocalizeFirstScan(const PolylineMap& map,
                                            const std::vector<LaserScan>& scans,
                                            std::size_t max_scans, const LocalizerParams& params) {
   Localizer localizer(map, params);
-  for (std::size_t i = 0; i < std::min(max_scans, scans.size()); ++i) {
+  std::optional<FirstPose> pending;  // localized, not yet confirmed
+  int confirmed = 0;
+  for (std::size_t i = 0; i < scans.size(); ++i) {
+    if (!pending && i >= max_scans) break;
     const LocalizerReport report = localizer.Process(scans[i]);
-    if (report.localized) return FirstPose{i, report.T_map_robot};
+    if (pending && !report.localized) pending.reset();  // lost before it was confirmed
+    if (!pending) {
+      if (report.localized && i < max_scans) pending = FirstPose{i, report.T_map_robot};
+      confirmed = 0;
+    } else if (report.matched) {
+      ++confirmed;
+    }
+    if (pending && confirmed >= params.first_pose_confirm_scans) return pending;
   }
-  return std::nullopt;
+  return pending;
 }
 
 }  // namespace shape_slam

@@ -255,6 +255,7 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "off_map_search_every", "... every this many such scans, and its best pose replaces the tracked one ...", &p.off_map_search_every},
       {"localizer", "off_map_margin", "... when it is matched at min_global_fit, scores this much more in the global search's field and no rival comes near ...", &p.off_map_margin},
       {"localizer", "off_map_confirm_scans", "... and has stayed so for this many more scans, tracked beside the pose", &p.off_map_confirm_scans},
+      {"localizer", "first_pose_confirm_scans", "run --map without --initial: the first localized pose counts once this many more scans matched after it, the tracking never lost (0: at once)", &p.first_pose_confirm_scans},
   };
 }
 

@@ -139,6 +139,33 @@ TEST(PipelineFromMapTest, TheLocalizerPlacesTheFirstScan) {
   EXPECT_GE(FractionCovered(part.map, again.map, 0.1), 0.95);
 }
 
+// A first pose that the next scans do not confirm (they see nothing, so the tracking is lost)
+// does not count: the log enters the map where a pose holds for first_pose_confirm_scans more
+// matched scans.
+TEST(PipelineFromMapTest, AFirstPoseTheNextScansDoNotConfirmIsDropped) {
+  const std::vector<LaserScan> scans = DriveAroundTheBlock(120, 4);
+  ShapeSlam first;
+  const Mapped part = MapScans(first, scans, 0, scans.size());
+  std::vector<LaserScan> later(scans.begin() + 60, scans.end());
+  LocalizerParams at_once;
+  at_once.first_pose_confirm_scans = 0;
+  const std::optional<FirstPose> unconfirmed = LocalizeFirstScan(part.map, later, 10, at_once);
+  ASSERT_TRUE(unconfirmed.has_value());
+  const std::size_t k = unconfirmed->scan;
+  for (std::size_t i = k + 1; i <= k + 5; ++i) {  // blinded: no return on any beam
+    std::fill(later[i].ranges_m.begin(), later[i].ranges_m.end(), later[i].max_range_m);
+  }
+  const std::optional<FirstPose> again = LocalizeFirstScan(part.map, later, 20, at_once);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->scan, k);  // at once: the pose the blinded scans never confirm
+
+  const std::optional<FirstPose> found = LocalizeFirstScan(part.map, later, 20);
+  ASSERT_TRUE(found.has_value());
+  EXPECT_GT(found->scan, k + 5);
+  EXPECT_LT(found->scan, 20u);
+  EXPECT_THAT(found->T_map_robot, IsNearly(part.trajectory[60 + found->scan].pose, 0.1, 0.05));
+}
+
 TEST(PipelineFromMapTest, NoScanLocalizedInAnUnrelatedMapIsNoFirstPose) {
   const std::vector<LaserScan> scans = DriveAroundTheBlock(5, 5);
   PolylineMap elsewhere;  // one short wall far away: nothing of the scans fits it
