@@ -79,6 +79,10 @@ void ShapeSlamParams::Validate() const {
   NonNegative(odometry_override_margin, "ShapeSlamParams::odometry_override_margin");
   NonNegative(odometry_override_step_ratio, "ShapeSlamParams::odometry_override_step_ratio");
   NonNegative(odometry_override_slack_m, "ShapeSlamParams::odometry_override_slack_m");
+  if (!std::isfinite(odometry_override_min_along) || odometry_override_min_along > 1.0) {
+    throw std::invalid_argument("ShapeSlamParams::odometry_override_min_along must be finite and <= 1");
+  }
+  NonNegative(odometry_override_judged_step_m, "ShapeSlamParams::odometry_override_judged_step_m");
   Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
   if (!(max_lost_growth >= 1.0) || !std::isfinite(max_lost_growth)) {
     throw std::invalid_argument("ShapeSlamParams::max_lost_growth must be >= 1");
@@ -475,14 +479,22 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
     return;
   }
   const Pose2 T_pred_last = T_map_sensor_pred.Inverse() * T_map_sensor_last;
+  const Pose2 T_sensor_robot = scan.T_robot_sensor.Inverse();
+  const Eigen::Vector2d odometry_step = MotionInFrame(T_pred_last.Inverse(), T_sensor_robot).Translation();
+  const Eigen::Vector2d match_step = MotionInFrame(alt.correction, T_sensor_robot).Translation();
+  const double slack = params_.odometry_override_slack_m;
   if (params_.odometry_override_step_ratio > 0.0) {
-    const Pose2 T_sensor_robot = scan.T_robot_sensor.Inverse();
-    const auto robot_motion = [&](const Pose2& sensor_motion) {
-      return MotionInFrame(sensor_motion, T_sensor_robot).Translation().norm();
-    };
-    const double supported = std::max(robot_motion(T_pred_last.Inverse()),
+    const double supported = std::max(odometry_step.norm(),
                                       params_.odometry_override_step_ratio * velocity_.LongestRecentStep());
-    if (robot_motion(alt.correction) > supported + params_.odometry_override_slack_m) return;
+    if (match_step.norm() > supported + slack) return;
+  }
+  // The wheels' direction of travel holds through a glitch (which turns the heading) and most
+  // slips: a match that moves the robot less than odometry_override_min_along of the odometry's
+  // step along it, or against it, found a look-alike place, not a glitch.
+  const double step = odometry_step.norm();
+  if (step >= params_.odometry_override_judged_step_m &&
+      match_step.dot(odometry_step) / step < params_.odometry_override_min_along * step - slack) {
+    return;
   }
   alt.correction = T_pred_last * alt.correction;
   alt.odometry_overridden = true;

@@ -52,6 +52,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "odometry_override_margin", "... and that match wins when it fits at least this much better", &p.odometry_override_margin},
       {"pipeline", "odometry_override_step_ratio", "... unless it moves the robot farther than both the odometry's step and this many times its longest recent step (0: no bound) ...", &p.odometry_override_step_ratio},
       {"pipeline", "odometry_override_slack_m", "... plus this (m)", &p.odometry_override_slack_m},
+      {"pipeline", "odometry_override_min_along", "... and only if it moves the robot along the odometry's step by at least this fraction of it, less that slack (a lower value, e.g. -100: off)", &p.odometry_override_min_along},
+      {"pipeline", "odometry_override_judged_step_m", "... judged so only where the odometry's step is at least this long (m)", &p.odometry_override_judged_step_m},
       {"pipeline", "motion_prior_sigma_rad", "... rotation scale (rad)", &p.motion_prior_sigma_rad},
       {"pipeline", "max_lost_growth", "without odometry, bound and window grow by 1 + scans without a match, up to this", &p.max_lost_growth},
       {"pipeline", "max_untrusted_coverage", "an unconfirmed scan updates the map only if less than this fraction of it is near the map", &p.max_untrusted_coverage},

@@ -382,6 +382,14 @@ TEST(PipelineSubmapTest, OdometryGlitchIsOverriddenByTheScans) {
   EXPECT_GT(MapWithFaults(glitched, unchecked).ate_m, 2.0 * with_check.ate_m);
 }
 
+// How far the mapped step into scan `at` is off the true one, metres.
+double StepError(const SimRun& run, std::size_t at, const ShapeSlamParams& params) {
+  const Outcome outcome = Map(run, params);
+  const Pose2 estimated = outcome.trajectory[at - 1].pose.Inverse() * outcome.trajectory[at].pose;
+  const Pose2 truth = run.truth[at - 1].pose.Inverse() * run.truth[at].pose;
+  return (estimated.Translation() - truth.Translation()).norm();
+}
+
 // The other way round: one scan gone wrong (its ranges are those of a scan 1.2 m further on,
 // 0.1 s later; the odometry is right). Matched without the odometry it would fit where it was
 // really taken, but neither the odometry nor the robot's recent steps (0.15 m per scan)
@@ -396,16 +404,37 @@ TEST(PipelineTest, AScanGoneWrongDoesNotOverrideGoodOdometry) {
   }
   ASSERT_GT(at, 0u);
   run.scans[at].ranges_m = run.scans[at + 8].ranges_m;
-  const auto jump_at = [&](const ShapeSlamParams& params) {
-    const Outcome outcome = Map(run, params);
-    const Pose2 estimated = outcome.trajectory[at - 1].pose.Inverse() * outcome.trajectory[at].pose;
-    const Pose2 truth = run.truth[at - 1].pose.Inverse() * run.truth[at].pose;
-    return (estimated.Translation() - truth.Translation()).norm();
-  };
   ShapeSlamParams bounded;
   bounded.odometry_override_step_ratio = 2.0;
-  EXPECT_LT(jump_at(bounded), 0.2);
-  EXPECT_GT(jump_at(ShapeSlamParams{}), 0.5);  // the default: no bound
+  EXPECT_LT(StepError(run, at, bounded), 0.2);
+  EXPECT_GT(StepError(run, at, ShapeSlamParams{}), 0.5);  // the default: no bound
+}
+
+// A scan gone wrong the other way: every 4th scan (0.6 m apart, the odometry right), one of
+// them with the ranges of the scan two before it, 1.2 m back. Matched without the odometry it
+// fits behind the robot, against the wheels' direction of travel
+// (odometry_override_min_along): the odometry is kept. With that rule off the scan drags the
+// pose back.
+TEST(PipelineTest, AMatchAgainstTheWheelsDirectionDoesNotOverrideTheOdometry) {
+  const SimRun full = Simulate(3);
+  SimRun run;
+  for (std::size_t i = 0; i < full.scans.size(); i += 4) {
+    run.scans.push_back(full.scans[i]);
+    run.truth.push_back(full.truth[i]);
+  }
+  std::size_t at = 0;
+  // Near the end of the block's first side (from scan 17 on), where the wall ahead fills much of
+  // the scan: at the odometry's pose the scan from 1.2 m back fits poorly, and the check runs.
+  for (std::size_t i = 17; i + 1 < run.scans.size() && at == 0; ++i) {
+    const Pose2 d = run.truth[i - 2].pose.Inverse() * run.truth[i].pose;
+    if (std::abs(d.theta) < 1e-9 && std::abs(d.x - 1.2) < 0.05) at = i;
+  }
+  ASSERT_GT(at, 0u);
+  run.scans[at].ranges_m = run.scans[at - 2].ranges_m;
+  ShapeSlamParams off;
+  off.odometry_override_min_along = -100.0;
+  EXPECT_LT(StepError(run, at, ShapeSlamParams{}), 0.2);
+  EXPECT_GT(StepError(run, at, off), 0.5);
 }
 
 // A wheel-base bias of 2 deg per metre on top of the simulated odometry's own drift.
