@@ -163,9 +163,8 @@ struct ShapeSlamParams {
   /// wheels' direction of travel holds through a heading glitch and most slips. A match that
   /// moved the robot backwards, or stopped it, where the odometry drove on had found a place
   /// that looks alike: behind the robot the scan's new part meets map that is already there,
-  /// and fits better than at the true pose (intel, every 2nd scan: 1.83 m ATE, 0.76 m with it,
-  /// docs/design.md "Odometry as a prior";
-  /// -100: off).
+  /// and fits better than at the true pose (intel, every 2nd scan: 1.83 m ATE, 0.76 m with it;
+  /// docs/design.md, "Odometry as a prior"). A low value (-100) is off.
   double odometry_override_min_along = 0.5;
   double odometry_override_judged_step_m = 0.5;
   /// A scan whose pose no match confirmed still updates the map when less than this fraction

@@ -80,7 +80,8 @@ void ShapeSlamParams::Validate() const {
   NonNegative(odometry_override_step_ratio, "ShapeSlamParams::odometry_override_step_ratio");
   NonNegative(odometry_override_slack_m, "ShapeSlamParams::odometry_override_slack_m");
   if (!std::isfinite(odometry_override_min_along) || odometry_override_min_along > 1.0) {
-    throw std::invalid_argument("ShapeSlamParams::odometry_override_min_along must be finite and <= 1");
+    throw std::invalid_argument(
+        "ShapeSlamParams::odometry_override_min_along must be finite and <= 1");
   }
   NonNegative(odometry_override_judged_step_m, "ShapeSlamParams::odometry_override_judged_step_m");
   Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
@@ -480,7 +481,8 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
   }
   const Pose2 T_pred_last = T_map_sensor_pred.Inverse() * T_map_sensor_last;
   const Pose2 T_sensor_robot = scan.T_robot_sensor.Inverse();
-  const Eigen::Vector2d odometry_step = MotionInFrame(T_pred_last.Inverse(), T_sensor_robot).Translation();
+  const Eigen::Vector2d odometry_step =
+      MotionInFrame(T_pred_last.Inverse(), T_sensor_robot).Translation();
   const Eigen::Vector2d match_step = MotionInFrame(alt.correction, T_sensor_robot).Translation();
   const double slack = params_.odometry_override_slack_m;
   if (params_.odometry_override_step_ratio > 0.0) {
