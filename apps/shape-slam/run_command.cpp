@@ -86,10 +86,11 @@ ArgParser MakeParser() {
           "Continuing a map (--map MAP): MAP is loaded and is the starting map; the new scans\n"
           "extend it (its polylines are merged with what they see, as in mapping) and the\n"
           "output map holds both. The first scan is placed by the global search of 'shape-slam\n"
-          "localize' (its [localizer] keys apply): the scans before the first one it localizes\n"
-          "are left out (noted on stderr and in stats.json, start_map.first_scan), and when none\n"
-          "of the first --search-scans scans is localized the run fails (exit code 1). With\n"
-          "--initial the first scan starts there. --out must not hold MAP itself.\n\n"
+          "localize' (its [localizer] keys apply), and counts once the next scans confirm it\n"
+          "(first_pose_confirm_scans): the scans before it are left out (noted on stderr and\n"
+          "in stats.json, start_map.first_scan), and when none of the first --search-scans\n"
+          "scans is localized the run fails (exit code 1). With --initial the first scan\n"
+          "starts there. --out must not hold MAP itself.\n\n"
           "Examples:\n  shape-slam run datasets/radish/intel.log.gz --out intel-out\n"
           "  shape-slam run more.log --map intel-out/map.polylines --out intel-more");
   return parser;
