@@ -13,6 +13,8 @@ consistently (bench/README.md, "Variants").
   odom-bad    every scan step's odometry with 5 deg (heading) and 5 cm (along, across) of
               Gaussian noise (seeded)
   odom-bias   a wheel-base error: 1 deg of heading per metre travelled
+  odom-stall  at 5 scan steps (seeded) the odometry arrives one scan late: the scan reports the
+              odometry pose of the scan before, the next scan the right one
 
 Perturbed copies (perturbed_copy): 2 mm of Gaussian noise on every valid range (not on
 no-return or invalid readings), seeded by the copy index; reference files unchanged.
@@ -27,10 +29,10 @@ import carmen
 from atomic import write_text
 
 NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120", "odom-glitch", "odom-bad",
-         "odom-bias"]
+         "odom-bias", "odom-stall"]
 # Variants that change the odometry alone: their ranges, timestamps and laser poses relative
 # to the odometry are the log's (the development logs' FLASER laser pose is their odometry pose).
-ODOMETRY_ONLY = ("zero-odom", "noisy-odom", "odom-glitch", "odom-bad", "odom-bias")
+ODOMETRY_ONLY = ("zero-odom", "noisy-odom", "odom-glitch", "odom-bad", "odom-bias", "odom-stall")
 
 NOISE_SEED = 20261201
 NOISE_TRANS_M_PER_SQRT_M = 0.05  # std of the translation noise (along and across) after 1 m
@@ -43,6 +45,8 @@ BAD_ODOM_SEED = 20261203
 BAD_ODOM_ROT_DEG = 5.0  # std of the heading noise of every scan step
 BAD_ODOM_TRANS_M = 0.05  # std of the translation noise (along and across) of every scan step
 BIAS_DEG_PER_M = 1.0  # heading error per metre travelled
+STALL_SEED = 20261204
+STALL_COUNT = 5  # scan steps whose odometry arrives one scan late
 RANGE_NOISE_M = 0.002  # std of the noise on each valid range of a perturbed copy
 RANGE_DECIMALS = 4  # ranges of a perturbed copy are written to 0.1 mm
 
@@ -204,6 +208,28 @@ def odom_bias(records):
         records, lambda d, _: (d[0], d[1], d[2] + per_m * math.hypot(d[0], d[1])))
 
 
+def odom_stall(records):
+    """At STALL_COUNT scan steps drawn from the whole log, the odometry arrives one scan late:
+    the step's increments are held back (the scan reports the odometry pose of the scan
+    before) and arrive with the next increment, so the next scan's pose is right again."""
+    rng = random.Random(STALL_SEED)
+    scans = sum(1 for f in records if f and f[0] == "FLASER")
+    stalls = set(rng.sample(range(1, scans - 1), min(STALL_COUNT, max(scans - 2, 0))))
+    state = {"scans": 0, "held": None}
+
+    def fault(d, is_scan):
+        step = state["scans"]  # the increment belongs to the step that ends at FLASER `step`
+        if is_scan:
+            state["scans"] += 1
+        if step in stalls:
+            state["held"] = d if state["held"] is None else compose(state["held"], d)
+            return (0.0, 0.0, 0.0)
+        if state["held"] is not None:
+            d, state["held"] = compose(state["held"], d), None
+        return d
+    return _rewrite_odometry(records, fault)
+
+
 def half_beams(records):
     out = []
     for f in records:
@@ -305,8 +331,8 @@ def write_variant(name, log_path, gt_path, relations_path, out_stem):
     elif name == "fov120":
         out = fov120(records, carmen.max_range_m(log_path))
     else:
-        out = {"odom-glitch": odom_glitch, "odom-bad": odom_bad, "odom-bias": odom_bias}[name](
-            records)
+        out = {"odom-glitch": odom_glitch, "odom-bad": odom_bad, "odom-bias": odom_bias,
+               "odom-stall": odom_stall}[name](records)
     log_out = out_stem + ".log"
     write_text(log_out, "".join(" ".join(f) + "\n" for f in out))
     all_stamps, kept = carmen.scan_stamps(log_path), carmen.scan_stamps(log_out)
