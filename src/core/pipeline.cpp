@@ -484,25 +484,30 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
   const Eigen::Vector2d odometry_step =
       MotionInFrame(T_pred_last.Inverse(), T_sensor_robot).Translation();
   const Eigen::Vector2d match_step = MotionInFrame(alt.correction, T_sensor_robot).Translation();
-  const double slack = params_.odometry_override_slack_m;
-  if (params_.odometry_override_step_ratio > 0.0) {
-    const double supported = std::max(odometry_step.norm(),
-                                      params_.odometry_override_step_ratio * velocity_.LongestRecentStep());
-    if (match_step.norm() > supported + slack) return;
-  }
-  // The wheels' direction of travel holds through a glitch (which turns the heading) and most
-  // slips: a match that moves the robot less than odometry_override_min_along of the odometry's
-  // step along it, or against it, found a look-alike place, not a glitch.
-  const double step = odometry_step.norm();
-  if (step >= params_.odometry_override_judged_step_m &&
-      match_step.dot(odometry_step) / step < params_.odometry_override_min_along * step - slack) {
-    return;
-  }
+  if (!OdometrySupportsOverride(match_step, odometry_step)) return;
   alt.correction = T_pred_last * alt.correction;
   alt.odometry_overridden = true;
   loc = alt;
   for (VisiblePolyline& v : visible_last) v.points_sensor = Transform(T_pred_last, v.points_sensor);
   visible = std::move(visible_last);
+}
+
+// Whether the odometry's step (robot frame, since the last scan) supports an override that moves
+// the robot by `match_step` instead: not farther than both that step and the robot's recent
+// steps (odometry_override_within_step, _step_ratio) plus the slack, and along it. The wheels' direction of travel holds through a glitch (which turns the heading)
+// and most slips: a match that moves the robot less than odometry_override_min_along of the
+// odometry's step along it, or against it, found a look-alike place, not a glitch.
+bool ShapeSlam::OdometrySupportsOverride(const Eigen::Vector2d& match_step,
+                                         const Eigen::Vector2d& odometry_step) const {
+  const double slack = params_.odometry_override_slack_m;
+  const double step = odometry_step.norm();
+  if (params_.odometry_override_within_step) {
+    const double reach = std::max(
+        step, params_.odometry_override_step_ratio * velocity_.LongestRecentStep());
+    if (match_step.norm() > reach + slack) return false;
+  }
+  if (step <= 0.0 || step < params_.odometry_override_judged_step_m) return true;
+  return match_step.dot(odometry_step) / step >= params_.odometry_override_min_along * step - slack;
 }
 
 // What registering one scan gave: the correction of its prediction and the visible shape of

@@ -392,9 +392,10 @@ double StepError(const SimRun& run, std::size_t at, const ShapeSlamParams& param
 
 // The other way round: one scan gone wrong (its ranges are those of a scan 1.2 m further on,
 // 0.1 s later; the odometry is right). Matched without the odometry it would fit where it was
-// really taken, but neither the odometry nor the robot's recent steps (0.15 m per scan)
-// support the jump (odometry_override_step_ratio): the odometry is kept. With the bound off the scan drags
-// the pose 1.2 m ahead and back.
+// really taken, but neither the odometry's step nor the robot's recent steps (0.15 m per scan)
+// support the jump (odometry_override_within_step): the odometry is kept, and still with
+// twice the recent steps allowed. With the bound off the scan drags the pose 1.2 m ahead and
+// back.
 TEST(PipelineTest, AScanGoneWrongDoesNotOverrideGoodOdometry) {
   SimRun run = Simulate(3);
   std::size_t at = 0;
@@ -404,10 +405,13 @@ TEST(PipelineTest, AScanGoneWrongDoesNotOverrideGoodOdometry) {
   }
   ASSERT_GT(at, 0u);
   run.scans[at].ranges_m = run.scans[at + 8].ranges_m;
-  ShapeSlamParams bounded;
-  bounded.odometry_override_step_ratio = 2.0;
-  EXPECT_LT(StepError(run, at, bounded), 0.2);
-  EXPECT_GT(StepError(run, at, ShapeSlamParams{}), 0.5);  // the default: no bound
+  ShapeSlamParams recent_steps;
+  recent_steps.odometry_override_step_ratio = 2.0;
+  ShapeSlamParams off;
+  off.odometry_override_within_step = false;
+  EXPECT_LT(StepError(run, at, ShapeSlamParams{}), 0.2);  // the default
+  EXPECT_LT(StepError(run, at, recent_steps), 0.2);
+  EXPECT_GT(StepError(run, at, off), 0.5);
 }
 
 // A scan gone wrong the other way: every 4th scan (0.6 m apart, the odometry right), one of
