@@ -354,6 +354,7 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   json.Key("status").Value(ToString(odometry.status));
   json.Key("scans_with_odometry").Value(odometry.scans_with_odometry);
   json.Key("scans_predicted").Value(odometry.scans_predicted);
+  json.Key("scans_stale").Value(odometry.scans_stale);
   json.Key("noise_scale_xy").Value(odometry.noise_scale_xy);
   json.Key("noise_scale_theta").Value(odometry.noise_scale_theta);
   json.Key("heading_per_m").Value(odometry.heading_per_m);

@@ -160,6 +160,13 @@ struct ShapeSlamParams {
   /// step alone, fails there; docs/design.md, "Odometry as a prior").
   bool odometry_override_within_step = true;
   double odometry_override_step_ratio = 1.0;
+  /// A scan whose odometry pose equals the last scan's while the robot's longest step of the
+  /// last scans reached this (m) is matched as if without odometry (the motion model, §4.3):
+  /// the odometry stalled (a message late, or published less often than the scans), it did
+  /// not see the robot stop. The next scan with fresh odometry is predicted from the last
+  /// scan that had some, so the late motion is not counted twice. Not in the paper; a large
+  /// value (e.g. 1000) is off.
+  double stale_odometry_min_step_m = 0.05;
   double odometry_override_slack_m = 0.2;
   /// ... and unless it moves the robot along the odometry's step by less than this fraction of
   /// that step, less odometry_override_slack_m (steps under odometry_override_judged_step_m are
@@ -234,6 +241,7 @@ struct OdometryReport {
   int scans = 0;                   ///< scans processed
   int scans_with_odometry = 0;     ///< of which carried an odometry pose
   int scans_predicted = 0;         ///< of which were predicted by odometry
+  int scans_stale = 0;  ///< of the others, whose odometry stalled (stale_odometry_min_step_m)
   /// The learned scale of the odometry noise model's translation and rotation sigmas
   /// (OdometryNoiseParams::learn; 1 until learned).
   double noise_scale_xy = 1.0;
@@ -346,6 +354,7 @@ class ShapeSlam {
     std::optional<Pose2> T_pred_robot_velocity;  // constant-velocity hint (no odometry)
     std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry, calibrated
     std::optional<Pose2> raw_odometry_delta;      // ... as the log gives it
+    bool odometry_stale = false;  // the odometry did not move (stale_odometry_min_step_m)
   };
   struct Keyframe {
     LaserScan scan;                      // counter-clockwise beams
@@ -395,6 +404,7 @@ class ShapeSlam {
   void LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction);
   void UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                          Registration& registration, ScanReport& report);
+  bool OdometryStalled(const Pose2& T_odom_robot) const;
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
@@ -434,6 +444,7 @@ class ShapeSlam {
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
   std::optional<Pose2> last_T_odom_robot_;
+  std::optional<Pose2> odometry_anchor_;  // the pose of the scan last_T_odom_robot_ came with
   OdometryMotionCheck odometry_motion_;  // odometry that never moved is none
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)

@@ -84,6 +84,7 @@ void ShapeSlamParams::Validate() const {
         "ShapeSlamParams::odometry_override_min_along must be finite and <= 1");
   }
   NonNegative(odometry_override_judged_step_m, "ShapeSlamParams::odometry_override_judged_step_m");
+  NonNegative(stale_odometry_min_step_m, "ShapeSlamParams::stale_odometry_min_step_m");
   Positive(motion_prior_sigma_rad, "ShapeSlamParams::motion_prior_sigma_rad");
   if (!(max_lost_growth >= 1.0) || !std::isfinite(max_lost_growth)) {
     throw std::invalid_argument("ShapeSlamParams::max_lost_growth must be >= 1");
@@ -161,6 +162,7 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_m
   for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
   graph_.AddNode(Pose2());  // node 0, held fixed: the frame of the loaded map (AddMapAnchor)
   last_T_map_robot_ = T_map_robot_first;
+  odometry_anchor_ = T_map_robot_first;
 }
 
 // Odometry that has not moved since the first scan is no odometry (logs without any carry
@@ -180,16 +182,28 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
   Prediction prediction;
   if (!last_T_map_robot_) return prediction;  // the first scan defines the map frame
   prediction.T_map_robot = *last_T_map_robot_;
-  if (odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot && last_T_odom_robot_) {
+  const bool odometry = odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot &&
+                        last_T_odom_robot_ && odometry_anchor_;
+  prediction.odometry_stale = odometry && OdometryStalled(*scan.T_odom_robot);
+  if (odometry && !prediction.odometry_stale) {
     const Pose2 raw = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
     const Pose2 delta = odometry_calibrator_.Correct(raw);
     prediction.raw_odometry_delta = raw;
     prediction.odometry_delta = delta;
-    prediction.T_map_robot = *last_T_map_robot_ * delta;
+    prediction.T_map_robot = *odometry_anchor_ * delta;
   } else {
     prediction.T_pred_robot_velocity = velocity_.Predict();
   }
   return prediction;
+}
+
+// The odometry pose is the last one to the bit while the robot was moving: the odometry did not
+// update (ShapeSlamParams::stale_odometry_min_step_m).
+bool ShapeSlam::OdometryStalled(const Pose2& T_odom_robot) const {
+  const Pose2& last = *last_T_odom_robot_;
+  return T_odom_robot.x == last.x && T_odom_robot.y == last.y &&
+         T_odom_robot.theta == last.theta &&
+         velocity_.LongestRecentStep() >= params_.stale_odometry_min_step_m;
 }
 
 bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {
@@ -537,6 +551,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   const Prediction prediction = Predict(scan);
   report.used_odometry = prediction.odometry_delta.has_value();
   odometry_.scans_predicted += report.used_odometry ? 1 : 0;
+  odometry_.scans_stale += prediction.odometry_stale ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
 
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
@@ -561,7 +576,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   // its guessed step to the previous keyframe is left for loop closure to correct.
   registration.guessed = params_.submaps.restart_when_lost && !loc.trusted &&
                          !registration.follows_motion && !registration.model_empty &&
-                         !report.used_odometry;
+                         !report.used_odometry && !prediction.odometry_stale;
   const bool may_update = loc.trusted || registration.model_empty || registration.guessed ||
                           loc.coverage < params_.max_untrusted_coverage;
   if (!shapes.fine.empty() && may_update &&
@@ -574,7 +589,10 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   }
   report.T_map_robot = GlobalPose(T_track_robot);
   last_T_map_robot_ = T_track_robot;
-  if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
+  if (scan.T_odom_robot && !prediction.odometry_stale) {
+    last_T_odom_robot_ = scan.T_odom_robot;
+    odometry_anchor_ = T_track_robot;
+  }
   return report;
 }
 

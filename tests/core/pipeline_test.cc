@@ -414,18 +414,23 @@ TEST(PipelineTest, AScanGoneWrongDoesNotOverrideGoodOdometry) {
   EXPECT_GT(StepError(run, at, off), 0.5);
 }
 
+// Every 4th scan of a simulated run (0.6 m apart) with its reference.
+SimRun EveryFourthScan(const SimRun& full) {
+  SimRun run;
+  for (std::size_t i = 0; i < full.scans.size(); i += 4) {
+    run.scans.push_back(full.scans[i]);
+    run.truth.push_back(full.truth[i]);
+  }
+  return run;
+}
+
 // A scan gone wrong the other way: every 4th scan (0.6 m apart, the odometry right), one of
 // them with the ranges of the scan two before it, 1.2 m back. Matched without the odometry it
 // fits behind the robot, against the wheels' direction of travel
 // (odometry_override_min_along): the odometry is kept. With that rule off the scan drags the
 // pose back.
 TEST(PipelineTest, AMatchAgainstTheWheelsDirectionDoesNotOverrideTheOdometry) {
-  const SimRun full = Simulate(3);
-  SimRun run;
-  for (std::size_t i = 0; i < full.scans.size(); i += 4) {
-    run.scans.push_back(full.scans[i]);
-    run.truth.push_back(full.truth[i]);
-  }
+  SimRun run = EveryFourthScan(Simulate(3));
   std::size_t at = 0;
   // Near the end of the block's first side (from scan 17 on), where the wall ahead fills much of
   // the scan: at the odometry's pose the scan from 1.2 m back fits poorly, and the check runs.
@@ -439,6 +444,46 @@ TEST(PipelineTest, AMatchAgainstTheWheelsDirectionDoesNotOverrideTheOdometry) {
   off.odometry_override_min_along = -100.0;
   EXPECT_LT(StepError(run, at, ShapeSlamParams{}), 0.2);
   EXPECT_GT(StepError(run, at, off), 0.5);
+}
+
+// Odometry that stalls: every 4th scan (0.6 m apart), and at every 7th of them from the 10th on
+// the odometry pose is that of the scan before (a message late); the next scan's is right
+// again. The stalled scans are matched without the odometry (stale_odometry_min_step_m) and
+// the late motion is not counted twice; the largest error of a step into or out of a stalled
+// scan stays small. With the check off, the prior holds the stalled scans back.
+TEST(PipelineTest, StalledOdometryIsNotTakenForAStop) {
+  SimRun run = EveryFourthScan(Simulate(3));
+  std::vector<std::size_t> stalled;
+  for (std::size_t i = 10; i + 1 < run.scans.size(); i += 7) {
+    run.scans[i].T_odom_robot = run.scans[i - 1].T_odom_robot;
+    stalled.push_back(i);
+  }
+  ASSERT_GE(stalled.size(), 3u);
+  const auto worst_step_error = [&](const ShapeSlamParams& params, int* stale) {
+    ShapeSlam slam(params);
+    for (const LaserScan& scan : run.scans) slam.Process(scan);
+    slam.Finish();
+    *stale = slam.Odometry().scans_stale;
+    const std::vector<StampedPose> trajectory = slam.Trajectory();
+    double worst = 0.0;
+    for (const std::size_t at : stalled) {
+      for (const std::size_t i : {at, at + 1}) {
+        const Pose2 estimated = trajectory[i - 1].pose.Inverse() * trajectory[i].pose;
+        const Pose2 truth = run.truth[i - 1].pose.Inverse() * run.truth[i].pose;
+        worst = std::max(worst, (estimated.Translation() - truth.Translation()).norm());
+      }
+    }
+    return worst;
+  };
+  int stale = 0;
+  const double with_check = worst_step_error(ShapeSlamParams{}, &stale);
+  EXPECT_EQ(stale, static_cast<int>(stalled.size()));
+  ShapeSlamParams off;
+  off.stale_odometry_min_step_m = 1000.0;
+  const double without = worst_step_error(off, &stale);
+  EXPECT_EQ(stale, 0);
+  EXPECT_LT(with_check, 0.1);
+  EXPECT_GT(without, 0.3);
 }
 
 // A wheel-base bias of 2 deg per metre on top of the simulated odometry's own drift.
