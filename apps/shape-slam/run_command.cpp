@@ -271,7 +271,12 @@ void ReportRunIssues(const RunOutput& out, const OdometryReport& odometry, bool 
                  "alone (as with --no-odometry)\n";
   } else if (requested && odometry.scans_predicted + 1 < odometry.scans) {
     std::cerr << "note: " << odometry.scans - odometry.scans_predicted - 1 << " of "
-              << odometry.scans << " scans had no moving odometry and were matched by shape alone\n";
+              << odometry.scans << " scans had no moving odometry";
+    if (odometry.scans_stale > 0) {
+      std::cerr << " (" << odometry.scans_stale
+                << " while the robot moved: the odometry stalled, stats.json odometry.scans_stale)";
+    }
+    std::cerr << " and were matched by shape alone\n";
   }
   if (MatchedFraction(out) < kMinMatchedFraction) {
     std::cerr << std::fixed << std::setprecision(1) << "warning: only " << out.matched << " of "

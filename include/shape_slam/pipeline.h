@@ -160,13 +160,6 @@ struct ShapeSlamParams {
   /// step alone, fails there; docs/design.md, "Odometry as a prior").
   bool odometry_override_within_step = true;
   double odometry_override_step_ratio = 1.0;
-  /// A scan whose odometry pose equals the last scan's while the robot's longest step of the
-  /// last scans reached this (m) is matched as if without odometry (the motion model, §4.3):
-  /// the odometry stalled (a message late, or published less often than the scans), it did
-  /// not see the robot stop. The next scan with fresh odometry is predicted from the last
-  /// scan that had some, so the late motion is not counted twice. Not in the paper; a large
-  /// value (e.g. 1000) is off.
-  double stale_odometry_min_step_m = 0.05;
   double odometry_override_slack_m = 0.2;
   /// ... and unless it moves the robot along the odometry's step by less than this fraction of
   /// that step, less odometry_override_slack_m (steps under odometry_override_judged_step_m are
@@ -178,6 +171,13 @@ struct ShapeSlamParams {
   /// docs/design.md, "Odometry as a prior"). A low value (-100) is off.
   double odometry_override_min_along = 0.5;
   double odometry_override_judged_step_m = 0.5;
+  /// A scan whose odometry pose equals the last scan's while the robot's longest step of the
+  /// last scans reached this (m) is matched as if without odometry (the motion model, §4.3):
+  /// the odometry stalled (a message late, or published less often than the scans), it did
+  /// not see the robot stop. The next scan with fresh odometry is predicted from the last
+  /// scan that had some, so the late motion is not counted twice. Not in the paper; a large
+  /// value (e.g. 1000) is off.
+  double stale_odometry_min_step_m = 0.05;
   /// A scan whose pose no match confirmed still updates the map when less than this fraction
   /// of it lies within new_territory_distance_m (metres) of the visible map: new territory.
   double max_untrusted_coverage = 0.3;
@@ -354,7 +354,7 @@ class ShapeSlam {
     std::optional<Pose2> T_pred_robot_velocity;  // constant-velocity hint (no odometry)
     std::optional<Pose2> odometry_delta;          // T_prev_cur from odometry, calibrated
     std::optional<Pose2> raw_odometry_delta;      // ... as the log gives it
-    bool odometry_stale = false;  // the odometry did not move (stale_odometry_min_step_m)
+    bool odometry_stale = false;  // the odometry stalled (stale_odometry_min_step_m)
   };
   struct Keyframe {
     LaserScan scan;                      // counter-clockwise beams
