@@ -173,6 +173,9 @@ class Localizer {
     double evidence = 0.0;
     double fit = 0.0;
     ConstantVelocity velocity;  // without odometry, predicts the next motion
+    // Its pose at the last scan whose odometry moved on (the odometry's increments start
+    // there; after a stalled scan, ShapeSlamParams::stale_odometry_min_step_m); unset: T_map_robot.
+    std::optional<Pose2> T_map_robot_at_odometry;
     int misses = 0;             // consecutive scans without a trusted match
     bool tracked = false;  // the pose tracked until a loss: accepted again at min_inlier_ratio
   };
@@ -223,7 +226,7 @@ class Localizer {
                                        const std::vector<Point2>& samples,
                                        const Pose2& T_map_robot_tracked) const;
   static void Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool confirmed);
-  std::optional<Pose2> OdometryDelta(const LaserScan& scan);
+  std::optional<Pose2> OdometryDelta(const LaserScan& scan, bool& stale);
 
   LocalizerParams params_;
   PolylineMap map_;

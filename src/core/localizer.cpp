@@ -143,11 +143,21 @@ void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   fit_mean_ = -1.0;  // set by the first match
 }
 
-// Odometry that never moved since the first scan is none (as in the mapper).
-std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan) {
+// Odometry that never moved since the first scan is none, and so is odometry that stalled: its
+// pose the last one's to the bit while the best hypothesis was moving (as in the mapper,
+// ShapeSlamParams::stale_odometry_min_step_m; `stale`).
+std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan, bool& stale) {
+  stale = false;
   if (!params_.stages.use_odometry || !scan.T_odom_robot) return std::nullopt;
   if (!odometry_motion_.Moved(*scan.T_odom_robot) || !last_T_odom_robot_) return std::nullopt;
-  return last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+  const Pose2& now = *scan.T_odom_robot;
+  const Pose2& last = *last_T_odom_robot_;
+  stale = now.x == last.x && now.y == last.y && now.theta == last.theta &&
+          !hypotheses_.empty() &&
+          hypotheses_.front().velocity.LongestRecentStep() >=
+              params_.stages.stale_odometry_min_step_m;
+  if (stale) return std::nullopt;
+  return last.Inverse() * now;
 }
 
 // The raw increment with the learned heading error taken out (OdometryCalibrator).
@@ -179,7 +189,8 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
   Pose2 T_map_robot_pred = hypothesis.T_map_robot;
   std::optional<Pose2> velocity_hint;
   if (odometry_delta) {
-    T_map_robot_pred = hypothesis.T_map_robot * *odometry_delta;
+    T_map_robot_pred =
+        hypothesis.T_map_robot_at_odometry.value_or(hypothesis.T_map_robot) * *odometry_delta;
   } else if (const std::optional<Pose2> v = hypothesis.velocity.Predict()) {
     velocity_hint = MotionInFrame(*v, scan.T_robot_sensor);
   }
@@ -468,12 +479,18 @@ LocalizerReport Localizer::Process(const LaserScan& input_scan) {
   ValidateScan(input_scan);
   const LaserScan scan = CounterClockwiseScan(input_scan);
   const ScanShapes shapes = ExtractScanShapes(scan, params_.stages.shapes);
-  const std::optional<Pose2> raw_odometry_delta = OdometryDelta(scan);
+  bool stale = false;
+  const std::optional<Pose2> raw_odometry_delta = OdometryDelta(scan, stale);
   LocalizerReport report = status_ == LocalizerStatus::kTracking
                                ? TrackPose(shapes, scan, raw_odometry_delta)
                                : Search(shapes, scan, Calibrated(raw_odometry_delta));
   report.timestamp_s = scan.timestamp_s;
-  if (scan.T_odom_robot) last_T_odom_robot_ = scan.T_odom_robot;
+  if (scan.T_odom_robot && !stale) {
+    // The next odometry increment starts at this scan: so does every pose it moves.
+    last_T_odom_robot_ = scan.T_odom_robot;
+    for (Hypothesis& h : hypotheses_) h.T_map_robot_at_odometry = h.T_map_robot;
+    if (challenger_) challenger_->T_map_robot_at_odometry = challenger_->T_map_robot;
+  }
   return report;
 }
 

@@ -340,6 +340,41 @@ TEST(LocalizerTest, TheOdometrysHeadingErrorIsLearned) {
   EXPECT_EQ(learned(biased, false), 0.0);
 }
 
+// Odometry that stalls (as in the mapper, ShapeSlamParams::stale_odometry_min_step_m): every
+// 4th scan (0.6 m apart), and at every 7th of them from the 5th on the odometry pose is that of
+// the scan before; the next scan's is right again. The stalled scans are tracked without the
+// odometry and the late motion is not counted twice: every pose stays right. With the check
+// off the prior holds the stalled scans back.
+TEST(LocalizerTest, StalledOdometryIsNotTakenForAStop) {
+  const SimRun full = Simulate(0, 240, 3);
+  SimRun run;
+  for (std::size_t i = 0; i < full.scans.size(); i += 4) {
+    run.scans.push_back(full.scans[i]);
+    run.truth.push_back(full.truth[i]);
+  }
+  std::vector<std::size_t> stalled;
+  for (std::size_t i = 5; i + 1 < run.scans.size(); i += 7) {
+    run.scans[i].T_odom_robot = run.scans[i - 1].T_odom_robot;
+    stalled.push_back(i);
+  }
+  ASSERT_GE(stalled.size(), 4u);
+  const auto worst_error = [&](const LocalizerParams& params) {
+    Localizer localizer(SceneMap(testing::LoopWorld()), params);
+    localizer.SetInitialPose(run.truth[0]);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const Pose2 pose = localizer.Process(run.scans[i]).T_map_robot;
+      worst = std::max(worst, (pose.Translation() - run.truth[i].Translation()).norm());
+    }
+    return worst;
+  };
+  LocalizerParams off;
+  off.stages.stale_odometry_min_step_m = 1000.0;
+  const double with_check = worst_error(LocalizerParams{}), without = worst_error(off);
+  EXPECT_LT(with_check, 0.1);
+  EXPECT_GT(without, 0.3);
+}
+
 TEST(LocalizerTest, IsDeterministic) {
   const SimRun run = Simulate(1, 15, 5);
   Localizer a(SceneMap(testing::LoopWorld())), b(SceneMap(testing::LoopWorld()));
