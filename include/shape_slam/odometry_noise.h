@@ -145,4 +145,10 @@ class OdometryMotionCheck {
   bool moved_ = false;
 };
 
+/// Odometry that stalled for a scan (ShapeSlamParams::stale_odometry_min_step_m): its pose is
+/// the last scan's to the bit while the robot's longest recent step reached min_step_m (a
+/// message late, or published less often than the scans; a robot at rest is not stalled).
+bool OdometryStalled(const Pose2& T_odom_robot, const Pose2& last_T_odom_robot,
+                     double longest_recent_step_m, double min_step_m);
+
 }  // namespace shape_slam

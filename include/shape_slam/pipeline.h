@@ -404,7 +404,6 @@ class ShapeSlam {
   void LearnOdometryNoise(const Pose2& odometry_delta, const Pose2& correction);
   void UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                          Registration& registration, ScanReport& report);
-  bool OdometryStalled(const Pose2& T_odom_robot) const;
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,

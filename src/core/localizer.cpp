@@ -150,14 +150,12 @@ std::optional<Pose2> Localizer::OdometryDelta(const LaserScan& scan, bool& stale
   stale = false;
   if (!params_.stages.use_odometry || !scan.T_odom_robot) return std::nullopt;
   if (!odometry_motion_.Moved(*scan.T_odom_robot) || !last_T_odom_robot_) return std::nullopt;
-  const Pose2& now = *scan.T_odom_robot;
-  const Pose2& last = *last_T_odom_robot_;
-  stale = now.x == last.x && now.y == last.y && now.theta == last.theta &&
-          !hypotheses_.empty() &&
-          hypotheses_.front().velocity.LongestRecentStep() >=
-              params_.stages.stale_odometry_min_step_m;
+  stale = !hypotheses_.empty() &&
+          OdometryStalled(*scan.T_odom_robot, *last_T_odom_robot_,
+                          hypotheses_.front().velocity.LongestRecentStep(),
+                          params_.stages.stale_odometry_min_step_m);
   if (stale) return std::nullopt;
-  return last.Inverse() * now;
+  return last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
 }
 
 // The raw increment with the learned heading error taken out (OdometryCalibrator).

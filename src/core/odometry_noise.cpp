@@ -201,4 +201,10 @@ bool OdometryMotionCheck::Moved(const Pose2& T_odom_robot) {
   return moved_;
 }
 
+bool OdometryStalled(const Pose2& T_odom_robot, const Pose2& last_T_odom_robot,
+                     double longest_recent_step_m, double min_step_m) {
+  return T_odom_robot.x == last_T_odom_robot.x && T_odom_robot.y == last_T_odom_robot.y &&
+         T_odom_robot.theta == last_T_odom_robot.theta && longest_recent_step_m >= min_step_m;
+}
+
 }  // namespace shape_slam

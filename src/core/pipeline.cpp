@@ -184,7 +184,9 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
   prediction.T_map_robot = *last_T_map_robot_;
   const bool odometry = odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot &&
                         last_T_odom_robot_ && odometry_anchor_;
-  prediction.odometry_stale = odometry && OdometryStalled(*scan.T_odom_robot);
+  prediction.odometry_stale =
+      odometry && OdometryStalled(*scan.T_odom_robot, *last_T_odom_robot_,
+                                  velocity_.LongestRecentStep(), params_.stale_odometry_min_step_m);
   if (odometry && !prediction.odometry_stale) {
     const Pose2 raw = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
     const Pose2 delta = odometry_calibrator_.Correct(raw);
@@ -195,15 +197,6 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
     prediction.T_pred_robot_velocity = velocity_.Predict();
   }
   return prediction;
-}
-
-// The odometry pose is the last one to the bit while the robot was moving: the odometry did not
-// update (ShapeSlamParams::stale_odometry_min_step_m).
-bool ShapeSlam::OdometryStalled(const Pose2& T_odom_robot) const {
-  const Pose2& last = *last_T_odom_robot_;
-  return T_odom_robot.x == last.x && T_odom_robot.y == last.y &&
-         T_odom_robot.theta == last.theta &&
-         velocity_.LongestRecentStep() >= params_.stale_odometry_min_step_m;
 }
 
 bool ShapeSlam::IsKeyframe(const Pose2& T_map_robot) const {

@@ -255,5 +255,15 @@ TEST(OdometryCalibrationTest, InvalidParamsAreRefused) {
   EXPECT_NO_THROW(OdometryCalibrationParams{}.Validate());
 }
 
+// Stalled: the same odometry pose to the bit while the robot was moving; a robot at rest, or
+// odometry that moved by a rounding step, is not stalled.
+TEST(OdometryStalledTest, OnlyTheSamePoseWhileMoving) {
+  const Pose2 last(1.5, -2.0, 0.3);
+  EXPECT_TRUE(OdometryStalled(last, last, 0.6, 0.05));
+  EXPECT_FALSE(OdometryStalled(last, last, 0.01, 0.05));  // at rest
+  EXPECT_FALSE(OdometryStalled(Pose2(1.5 + 1e-12, -2.0, 0.3), last, 0.6, 0.05));
+  EXPECT_FALSE(OdometryStalled(Pose2(1.5, -2.0, 0.3 + 1e-12), last, 0.6, 0.05));
+}
+
 }  // namespace
 }  // namespace shape_slam
