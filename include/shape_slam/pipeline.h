@@ -442,8 +442,13 @@ class ShapeSlam {
   LoopCloser loop_closer_;
   std::vector<ScanAnchor> anchors_;
   std::optional<Pose2> last_T_map_robot_;
-  std::optional<Pose2> last_T_odom_robot_;
-  std::optional<Pose2> odometry_anchor_;  // the pose of the scan last_T_odom_robot_ came with
+  // The last scan whose odometry moved on: its odometry pose and its pose (tracking frame),
+  // where the next odometry increment starts (a stalled scan is skipped).
+  struct OdometryAnchor {
+    Pose2 T_odom_robot;
+    Pose2 T_track_robot;
+  };
+  std::optional<OdometryAnchor> odometry_anchor_;
   OdometryMotionCheck odometry_motion_;  // odometry that never moved is none
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)

@@ -162,7 +162,6 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params, const PolylineMap& initial_m
   for (const PolylineId id : initial_map.Ids()) initial_map_.Add(initial_map.Get(id));
   graph_.AddNode(Pose2());  // node 0, held fixed: the frame of the loaded map (AddMapAnchor)
   last_T_map_robot_ = T_map_robot_first;
-  odometry_anchor_ = T_map_robot_first;
 }
 
 // Odometry that has not moved since the first scan is no odometry (logs without any carry
@@ -182,17 +181,17 @@ ShapeSlam::Prediction ShapeSlam::Predict(const LaserScan& scan) const {
   Prediction prediction;
   if (!last_T_map_robot_) return prediction;  // the first scan defines the map frame
   prediction.T_map_robot = *last_T_map_robot_;
-  const bool odometry = odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot &&
-                        last_T_odom_robot_ && odometry_anchor_;
+  const bool odometry =
+      odometry_.status == OdometryStatus::kUsed && scan.T_odom_robot && odometry_anchor_;
   prediction.odometry_stale =
-      odometry && OdometryStalled(*scan.T_odom_robot, *last_T_odom_robot_,
+      odometry && OdometryStalled(*scan.T_odom_robot, odometry_anchor_->T_odom_robot,
                                   velocity_.LongestRecentStep(), params_.stale_odometry_min_step_m);
   if (odometry && !prediction.odometry_stale) {
-    const Pose2 raw = last_T_odom_robot_->Inverse() * *scan.T_odom_robot;
+    const Pose2 raw = odometry_anchor_->T_odom_robot.Inverse() * *scan.T_odom_robot;
     const Pose2 delta = odometry_calibrator_.Correct(raw);
     prediction.raw_odometry_delta = raw;
     prediction.odometry_delta = delta;
-    prediction.T_map_robot = *odometry_anchor_ * delta;
+    prediction.T_map_robot = odometry_anchor_->T_track_robot * delta;
   } else {
     prediction.T_pred_robot_velocity = velocity_.Predict();
   }
@@ -584,8 +583,7 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   report.T_map_robot = GlobalPose(T_track_robot);
   last_T_map_robot_ = T_track_robot;
   if (scan.T_odom_robot && !prediction.odometry_stale) {
-    last_T_odom_robot_ = scan.T_odom_robot;
-    odometry_anchor_ = T_track_robot;
+    odometry_anchor_ = OdometryAnchor{*scan.T_odom_robot, T_track_robot};
   }
   return report;
 }
