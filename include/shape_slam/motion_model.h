@@ -36,6 +36,8 @@ class ConstantVelocity {
   /// The longest translation among the last motions (velocity_window of them), metres; 0
   /// before the first.
   double LongestRecentStep() const;
+  /// The largest turn (absolute) among the last motions, radians; 0 before the first.
+  double LargestRecentTurn() const;
 
  private:
   double UsualSpeed() const;  // metres per scan; 0 while fewer than 5 motions are confirmed

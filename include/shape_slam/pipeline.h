@@ -161,6 +161,13 @@ struct ShapeSlamParams {
   bool odometry_override_within_step = true;
   double odometry_override_step_ratio = 1.0;
   double odometry_override_slack_m = 0.2;
+  /// ... nor turns it farther than both the odometry's turn and the robot's largest turn of the
+  /// last scans, plus this (rad; with odometry_override_within_step). A glitch makes the
+  /// odometry turn where the robot did not, so the match that mends it turns less; wheels do
+  /// not miss a quarter turn. A match that turns the robot by far more than both found a
+  /// look-alike view (intel half-beams, a build with centred samples: 99 deg where the
+  /// odometry said 3 deg and the last turns 19 deg at most, 8 m ATE; docs/notebook.md).
+  double odometry_override_turn_slack_rad = 0.35;
   /// ... and unless it moves the robot along the odometry's step by less than this fraction of
   /// that step, less odometry_override_slack_m (steps under odometry_override_judged_step_m are
   /// not judged: their direction is the odometry's noise as much as the wheels'): the
@@ -389,8 +396,7 @@ class ShapeSlam {
                                     const std::optional<Pose2>& velocity_hint,
                                     std::vector<Polyline> recent_fine,
                                     std::vector<VisiblePolyline>& visible) const;
-  bool OdometrySupportsOverride(const Eigen::Vector2d& match_step,
-                                const Eigen::Vector2d& odometry_step) const;
+  bool OdometrySupportsOverride(const Pose2& match_step, const Pose2& odometry_step) const;
   void CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
                      const Pose2& T_map_sensor_pred, const Pose2& T_map_sensor_last,
                      internal::Localization& loc, std::vector<VisiblePolyline>& visible) const;

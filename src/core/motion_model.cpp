@@ -75,4 +75,10 @@ double ConstantVelocity::LongestRecentStep() const {
   return longest;
 }
 
+double ConstantVelocity::LargestRecentTurn() const {
+  double largest = 0.0;
+  for (const Pose2& m : recent_motions_) largest = std::max(largest, std::abs(m.theta));
+  return largest;
+}
+
 }  // namespace shape_slam

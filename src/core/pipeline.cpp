@@ -79,6 +79,8 @@ void ShapeSlamParams::Validate() const {
   NonNegative(odometry_override_margin, "ShapeSlamParams::odometry_override_margin");
   NonNegative(odometry_override_step_ratio, "ShapeSlamParams::odometry_override_step_ratio");
   NonNegative(odometry_override_slack_m, "ShapeSlamParams::odometry_override_slack_m");
+  NonNegative(odometry_override_turn_slack_rad,
+              "ShapeSlamParams::odometry_override_turn_slack_rad");
   if (!std::isfinite(odometry_override_min_along) || odometry_override_min_along > 1.0) {
     throw std::invalid_argument(
         "ShapeSlamParams::odometry_override_min_along must be finite and <= 1");
@@ -487,9 +489,8 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
   }
   const Pose2 T_pred_last = T_map_sensor_pred.Inverse() * T_map_sensor_last;
   const Pose2 T_sensor_robot = scan.T_robot_sensor.Inverse();
-  const Eigen::Vector2d odometry_step =
-      MotionInFrame(T_pred_last.Inverse(), T_sensor_robot).Translation();
-  const Eigen::Vector2d match_step = MotionInFrame(alt.correction, T_sensor_robot).Translation();
+  const Pose2 odometry_step = MotionInFrame(T_pred_last.Inverse(), T_sensor_robot);
+  const Pose2 match_step = MotionInFrame(alt.correction, T_sensor_robot);
   if (!OdometrySupportsOverride(match_step, odometry_step)) return;
   alt.correction = T_pred_last * alt.correction;
   alt.odometry_overridden = true;
@@ -500,21 +501,27 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
 
 // Whether the odometry's step (robot frame, since the last scan) supports an override that moves
 // the robot by `match_step` instead: not farther than both that step and the robot's recent
-// steps (odometry_override_within_step, _step_ratio) plus the slack, and along it. The wheels'
+// steps (odometry_override_within_step, _step_ratio) plus the slack, not turning farther than
+// both the odometry's turn and the recent turns plus odometry_override_turn_slack_rad, and
+// along it. The wheels'
 // direction of travel holds through a glitch (which turns the heading) and most slips: a match
 // that moves the robot less than odometry_override_min_along of the odometry's step along it,
 // or against it, found a look-alike place, not a glitch.
-bool ShapeSlam::OdometrySupportsOverride(const Eigen::Vector2d& match_step,
-                                         const Eigen::Vector2d& odometry_step) const {
+bool ShapeSlam::OdometrySupportsOverride(const Pose2& match_step,
+                                         const Pose2& odometry_step) const {
   const double slack = params_.odometry_override_slack_m;
-  const double step = odometry_step.norm();
+  const Eigen::Vector2d odometry_t = odometry_step.Translation();
+  const Eigen::Vector2d match_t = match_step.Translation();
+  const double step = odometry_t.norm();
   if (params_.odometry_override_within_step) {
     const double reach = std::max(
         step, params_.odometry_override_step_ratio * velocity_.LongestRecentStep());
-    if (match_step.norm() > reach + slack) return false;
+    if (match_t.norm() > reach + slack) return false;
+    const double turn = std::max(std::abs(odometry_step.theta), velocity_.LargestRecentTurn());
+    if (std::abs(match_step.theta) > turn + params_.odometry_override_turn_slack_rad) return false;
   }
   if (step <= 0.0 || step < params_.odometry_override_judged_step_m) return true;
-  return match_step.dot(odometry_step) / step >= params_.odometry_override_min_along * step - slack;
+  return match_t.dot(odometry_t) / step >= params_.odometry_override_min_along * step - slack;
 }
 
 // What registering one scan gave: the correction of its prediction and the visible shape of

@@ -54,6 +54,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "odometry_override_within_step", "... unless it moves the robot farther than both the odometry's step ...", &p.odometry_override_within_step},
       {"pipeline", "odometry_override_step_ratio", "... and this many times its longest recent step ...", &p.odometry_override_step_ratio},
       {"pipeline", "odometry_override_slack_m", "... plus this (m)", &p.odometry_override_slack_m},
+      {"pipeline", "odometry_override_turn_slack_rad", "... nor turns it farther than both the odometry's turn and its largest recent turn plus this (rad)", &p.odometry_override_turn_slack_rad},
       {"pipeline", "odometry_override_min_along", "... and only if it moves the robot along the odometry's step by at least this fraction of it, less that slack (a lower value, e.g. -100: off)", &p.odometry_override_min_along},
       {"pipeline", "odometry_override_judged_step_m", "... judged so only where the odometry's step is at least this long (m)", &p.odometry_override_judged_step_m},
       {"pipeline", "stale_odometry_min_step_m", "a scan whose odometry pose equals the last scan's while the robot's recent steps reached this (m) is matched without odometry: the odometry stalled (a large value, e.g. 1000: off)", &p.stale_odometry_min_step_m},

@@ -414,6 +414,36 @@ TEST(PipelineTest, AScanGoneWrongDoesNotOverrideGoodOdometry) {
   EXPECT_GT(StepError(run, at, off), 0.5);
 }
 
+// One scan gone wrong by a turn: on a straight stretch its ranges are those the robot would
+// see from where it is, turned 1.4 rad (the odometry is right). Matched without the odometry it
+// fits that turned view, at the odometry's step but turned far beyond both the odometry's turn
+// and the robot's recent turns (odometry_override_turn_slack_rad): the odometry is kept. With
+// the turn bound off the override turns the robot by 80 deg.
+TEST(PipelineTest, AMatchTurningFarBeyondTheOdometryDoesNotOverrideIt) {
+  SimRun run = Simulate(3);
+  std::size_t at = 0;
+  for (std::size_t i = 20; i + 1 < run.scans.size() && at == 0; ++i) {
+    const Pose2 d = run.truth[i - 4].pose.Inverse() * run.truth[i].pose;
+    if (std::abs(d.theta) < 1e-9 && std::abs(d.x - 0.6) < 0.05) at = i;
+  }
+  ASSERT_GT(at, 0u);
+  std::mt19937 prng(11);
+  Pose2 turned = run.truth[at].pose;
+  turned.theta = NormalizeAngle(turned.theta + 1.4);
+  run.scans[at].ranges_m =
+      testing::SimulateScan(testing::LoopWorld(), turned, testing::ScannerModel{}, prng).ranges_m;
+  const auto turn_error = [&](const ShapeSlamParams& params) {
+    const Outcome outcome = Map(run, params);
+    const Pose2 estimated = outcome.trajectory[at - 1].pose.Inverse() * outcome.trajectory[at].pose;
+    const Pose2 truth = run.truth[at - 1].pose.Inverse() * run.truth[at].pose;
+    return std::abs(NormalizeAngle(estimated.theta - truth.theta));
+  };
+  ShapeSlamParams off;
+  off.odometry_override_turn_slack_rad = 100.0;
+  EXPECT_LT(turn_error(ShapeSlamParams{}), 0.05);
+  EXPECT_GT(turn_error(off), 1.0);
+}
+
 // Every 4th scan of a simulated run (0.6 m apart) with its reference.
 SimRun EveryFourthScan(const SimRun& full) {
   SimRun run;
