@@ -166,7 +166,9 @@ struct ShapeSlamParams {
   /// odometry turn where the robot did not, so the match that mends it turns less; wheels do
   /// not miss a quarter turn. A match that turns the robot by far more than both found a
   /// look-alike view (intel half-beams, a build with centred samples: 99 deg where the
-  /// odometry said 3 deg and the last turns 19 deg at most, 8 m ATE; docs/notebook.md).
+  /// odometry said 3 deg and the last turns 19 deg at most, 8 m ATE; docs/notebook.md). The
+  /// 20 deg of slack stay above poor odometry's heading errors (an unseen log of issue 22:
+  /// 4 deg per step median, 12 deg p90).
   double odometry_override_turn_slack_rad = 0.35;
   /// ... and unless it moves the robot along the odometry's step by less than this fraction of
   /// that step, less odometry_override_slack_m (steps under odometry_override_judged_step_m are

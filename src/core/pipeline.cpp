@@ -501,12 +501,11 @@ void ShapeSlam::CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
 
 // Whether the odometry's step (robot frame, since the last scan) supports an override that moves
 // the robot by `match_step` instead: not farther than both that step and the robot's recent
-// steps (odometry_override_within_step, _step_ratio) plus the slack, not turning farther than
-// both the odometry's turn and the recent turns plus odometry_override_turn_slack_rad, and
-// along it. The wheels'
-// direction of travel holds through a glitch (which turns the heading) and most slips: a match
-// that moves the robot less than odometry_override_min_along of the odometry's step along it,
-// or against it, found a look-alike place, not a glitch.
+// steps (odometry_override_within_step, _step_ratio) plus the slack, not turning it farther than
+// both the odometry's turn and the recent turns plus odometry_override_turn_slack_rad, and along
+// the odometry's step. The wheels' direction of travel holds through a glitch (which turns the
+// heading) and most slips: a match that moves the robot less than odometry_override_min_along of
+// the odometry's step along it, or against it, found a look-alike place, not a glitch.
 bool ShapeSlam::OdometrySupportsOverride(const Pose2& match_step,
                                          const Pose2& odometry_step) const {
   const double slack = params_.odometry_override_slack_m;
