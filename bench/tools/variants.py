@@ -29,7 +29,7 @@ import carmen
 from atomic import write_text
 
 NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120", "odom-glitch", "odom-bad",
-         "odom-bias", "odom-stall"]
+         "odom-bias", "odom-stall", "mirror"]
 # Variants that change the odometry alone: their ranges, timestamps and laser poses relative
 # to the odometry are the log's (the development logs' FLASER laser pose is their odometry pose).
 ODOMETRY_ONLY = ("zero-odom", "noisy-odom", "odom-glitch", "odom-bad", "odom-bias", "odom-stall")
@@ -230,6 +230,29 @@ def odom_stall(records):
     return _rewrite_odometry(records, fault)
 
 
+def mirror(records):
+    """The log's mirror image (y -> -y): each scan's beams in reverse order, the y and heading of
+    every pose (and ODOM's rotational velocity) negated. A mapper without a handedness scores a
+    log and its mirror alike. With an even beam count the FLASER beams span -90 .. 90 - step deg
+    (carmen.flaser_angles_rad), so beam i's mirror is beam n - i: the mirrored beam 0 (-90 deg)
+    has no source and reads 0 (no reading), and the reading of the log's beam 0 is dropped."""
+    out = []
+    for f in records:
+        if f and f[0] == "FLASER":
+            n = _flaser_n(f)
+            ranges = f[2:2 + n]
+            mirrored = ranges[::-1] if n % 2 else ["0.000000", *ranges[:0:-1]]
+            f = [*f[:2], *mirrored, *f[2 + n:]]
+            for _, y, theta in _pose_slots(f):
+                f[y], f[theta] = fmt(-float(f[y])), fmt(-float(f[theta]))
+        elif f and f[0] == "ODOM":
+            f = list(f)
+            for i in (2, 3, 5):  # y, theta, rotational velocity
+                f[i] = fmt(-float(f[i]))
+        out.append(f)
+    return out
+
+
 def half_beams(records):
     out = []
     for f in records:
@@ -291,6 +314,22 @@ def _write_relations(path, rows):
                              for t1, t2, x, y, th in rows))
 
 
+def mirror_reference(path, out_path, columns):
+    """A reference file of the mirrored log: gt (columns=1: t x y theta) or relations
+    (columns=2: t1 t2 x y z roll pitch yaw) with y and the heading negated."""
+    lines = []
+    with open(path) as f:
+        for line in f:
+            v = line.split()
+            heading = 3 if columns == 1 else 7
+            if len(v) <= heading or v[0].startswith("#"):
+                continue
+            v[columns + 1], v[heading] = fmt(-float(v[columns + 1])), fmt(-float(v[heading]))
+            lines.append(" ".join(v) + "\n")
+    write_text(out_path, "".join(lines))
+    return len(lines)
+
+
 def every2_relations(relations_path, out_path, all_stamps, kept_stamps):
     """Local relations of the kept scans by composing the two original local relations across
     the dropped scan, then every original relation whose two timestamps are kept."""
@@ -330,12 +369,20 @@ def write_variant(name, log_path, gt_path, relations_path, out_stem):
         out = half_beams(records)
     elif name == "fov120":
         out = fov120(records, carmen.max_range_m(log_path))
+    elif name == "mirror":
+        out = mirror(records)
     else:
         out = {"odom-glitch": odom_glitch, "odom-bad": odom_bad, "odom-bias": odom_bias,
                "odom-stall": odom_stall}[name](records)
     log_out = out_stem + ".log"
     write_text(log_out, "".join(" ".join(f) + "\n" for f in out))
     all_stamps, kept = carmen.scan_stamps(log_path), carmen.scan_stamps(log_out)
+    if name == "mirror":
+        if gt_path:
+            mirror_reference(gt_path, out_stem + ".gt.txt", 1)
+        if relations_path:
+            mirror_reference(relations_path, out_stem + ".relations", 2)
+        return log_out
     if gt_path:
         carmen.write_subset_by_stamps(gt_path, out_stem + ".gt.txt", kept, 1)
     if relations_path:
