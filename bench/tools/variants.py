@@ -314,20 +314,20 @@ def _write_relations(path, rows):
                              for t1, t2, x, y, th in rows))
 
 
-def mirror_reference(path, out_path, columns):
-    """A reference file of the mirrored log: gt (columns=1: t x y theta) or relations
-    (columns=2: t1 t2 x y z roll pitch yaw) with y and the heading negated."""
+def mirror_gt(path, out_path):
+    """The reference poses (t x y theta) of the mirrored log: y and the heading negated."""
     lines = []
     with open(path) as f:
         for line in f:
             v = line.split()
-            heading = 3 if columns == 1 else 7
-            if len(v) <= heading or v[0].startswith("#"):
-                continue
-            v[columns + 1], v[heading] = fmt(-float(v[columns + 1])), fmt(-float(v[heading]))
-            lines.append(" ".join(v) + "\n")
+            if len(v) >= 4 and not v[0].startswith("#"):
+                lines.append(f"{v[0]} {v[1]} {fmt(-float(v[2]))} {fmt(-float(v[3]))}\n")
     write_text(out_path, "".join(lines))
-    return len(lines)
+
+
+def mirror_relations(path, out_path):
+    """The relations of the mirrored log: y and the heading negated (planar: z, roll, pitch 0)."""
+    _write_relations(out_path, [(t1, t2, x, -y, -th) for t1, t2, x, y, th in _read_relations(path)])
 
 
 def every2_relations(relations_path, out_path, all_stamps, kept_stamps):
@@ -379,9 +379,9 @@ def write_variant(name, log_path, gt_path, relations_path, out_stem):
     all_stamps, kept = carmen.scan_stamps(log_path), carmen.scan_stamps(log_out)
     if name == "mirror":
         if gt_path:
-            mirror_reference(gt_path, out_stem + ".gt.txt", 1)
+            mirror_gt(gt_path, out_stem + ".gt.txt")
         if relations_path:
-            mirror_reference(relations_path, out_stem + ".relations", 2)
+            mirror_relations(relations_path, out_stem + ".relations")
         return log_out
     if gt_path:
         carmen.write_subset_by_stamps(gt_path, out_stem + ".gt.txt", kept, 1)

@@ -57,7 +57,7 @@ def main():
                        ["2.000000", "1.0", "2.000000", "0.300000"]], f"gt mirrored: {rows}")
         with open(os.path.join(d, "m.relations")) as f:
             rows = [line.split() for line in f]
-        check(rows == [["1.000000", "2.000000", "0.5", "-0.250000", "0", "0", "0", "0.600000"]],
+        check(rows == [["1.000000", "2.000000", "0.500000", "-0.250000", "0", "0", "0", "0.600000"]],
               f"relations mirrored: {rows}")
     print("mirror variant: ok")
 
