@@ -310,7 +310,7 @@ std::string FormatLoops(const ShapeSlam& slam,
          "graph_distance_m\n"
       << std::fixed;
   const auto stamp = [&](int k) {
-    return k >= 0 && k < static_cast<int>(keyframes.size()) ? keyframes[k].scan.timestamp_s : 0.0;
+    return k >= 0 && k < static_cast<int>(keyframes.size()) ? keyframes[k].scan->timestamp_s : 0.0;
   };
   for (const LoopEvent& event : slam.LoopEvents()) {
     const LoopClosure& c = event.closure;
@@ -433,7 +433,7 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
     stage("map.svg", io::RenderSvg(drawing));
     stage("map.png", io::RenderPng(drawing));
   }
-  // Every keyframe's scan at its final pose, copied once for the grids and loops.csv.
+  // Every keyframe's scan at its final pose (views, not copies) for the grids and loops.csv.
   const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
   StageGridOutputs(slam, keyframes, grids, stage);
   stage("scan_times.csv", FormatScanTimes(out));

@@ -349,9 +349,11 @@ class ShapeSlam {
   const OdometryReport& Odometry() const { return odometry_; }
 
   /// A keyframe: the scan that updated the map (beams counter-clockwise) and the robot pose,
-  /// corrected by the latest pose-graph optimisation.
+  /// corrected by the latest pose-graph optimisation. The scan is the mapper's own, not a copy
+  /// (a long log's keyframe scans weigh tens of MB): valid while the mapper lives and is given
+  /// no further scan.
   struct KeyframeView {
-    LaserScan scan;
+    const LaserScan* scan = nullptr;
     Pose2 T_map_robot;
   };
   /// Every keyframe in order, at its corrected pose (e.g. to build an occupancy grid).

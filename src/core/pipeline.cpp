@@ -721,7 +721,7 @@ std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {
   std::vector<KeyframeView> views;
   views.reserve(keyframes_.size());
   for (std::size_t k = 0; k < keyframes_.size(); ++k) {
-    views.push_back({keyframes_[k].scan, graph_.Node(places_[k].node)});
+    views.push_back({&keyframes_[k].scan, graph_.Node(places_[k].node)});
   }
   return views;
 }

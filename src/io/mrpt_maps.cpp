@@ -123,7 +123,7 @@ mrpt::maps::CSimpleMap MakeMrptSimplemap(const std::vector<ShapeSlam::KeyframeVi
     const Pose2 T = T_world_map * keyframes[i].T_map_robot;
     auto frame = mrpt::obs::CSensoryFrame::Create();
     frame->insert(mrpt::obs::CObservation2DRangeScan::Create(
-        internal::ToMrptScan(keyframes[i].scan, i)));
+        internal::ToMrptScan(*keyframes[i].scan, i)));
     auto pose = mrpt::poses::CPose3DPDFGaussian::Create(
         mrpt::poses::CPose3D(T.x, T.y, 0.0, T.theta, 0.0, 0.0));
     simplemap.insert(pose, frame);

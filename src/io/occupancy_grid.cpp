@@ -19,7 +19,7 @@ struct Ray {
 /// The beams of a keyframe that see anything: returns at their range, beams without return
 /// (range >= the scan's max range) up to max_free_range_m; no reading (NaN, <= 0): none.
 std::vector<Ray> RaysOf(const ShapeSlam::KeyframeView& keyframe, double max_free_range_m) {
-  const LaserScan& scan = keyframe.scan;
+  const LaserScan& scan = *keyframe.scan;
   const Pose2 T_map_sensor = keyframe.T_map_robot * scan.T_robot_sensor;
   const PointTransform to_map(T_map_sensor);
   std::vector<Ray> rays;

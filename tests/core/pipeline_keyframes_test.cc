@@ -29,10 +29,11 @@ TEST(PipelineKeyframesTest, OneViewPerKeyframeAtItsGraphPose) {
     EXPECT_DOUBLE_EQ(views[k].T_map_robot.x, node.x);
     EXPECT_DOUBLE_EQ(views[k].T_map_robot.y, node.y);
     EXPECT_DOUBLE_EQ(views[k].T_map_robot.theta, node.theta);
-    EXPECT_EQ(views[k].scan.ranges_m.size(), views[k].scan.angles_rad.size());
-    EXPECT_LT(views[k].scan.angles_rad.front(), views[k].scan.angles_rad.back());
+    ASSERT_NE(views[k].scan, nullptr);
+    EXPECT_EQ(views[k].scan->ranges_m.size(), views[k].scan->angles_rad.size());
+    EXPECT_LT(views[k].scan->angles_rad.front(), views[k].scan->angles_rad.back());
   }
-  EXPECT_DOUBLE_EQ(views.front().scan.timestamp_s, 0.0);  // the first scan is a keyframe
+  EXPECT_DOUBLE_EQ(views.front().scan->timestamp_s, 0.0);  // the first scan is a keyframe
 }
 
 }  // namespace

@@ -30,18 +30,22 @@ inline double RangeToWall(const Point2& sensor_map, double angle_map) {
   return range;
 }
 
-/// A keyframe at `T_map_robot` (sensor on the robot's origin) seeing the room with 360 beams.
-inline ShapeSlam::KeyframeView RoomKeyframe(const Pose2& T_map_robot) {
-  ShapeSlam::KeyframeView keyframe;
-  keyframe.T_map_robot = T_map_robot;
-  keyframe.scan.max_range_m = 30.0;
-  for (int i = 0; i < 360; ++i) {
-    const double angle = -M_PI + 2.0 * M_PI * i / 360.0;
-    keyframe.scan.angles_rad.push_back(angle);
-    keyframe.scan.ranges_m.push_back(
-        RangeToWall(T_map_robot.Translation(), T_map_robot.theta + angle));
+/// A keyframe at `T_map_robot` (sensor on the robot's origin) seeing the room with 360 beams:
+/// the scan, and the view of it that the grids take.
+struct RoomKeyframe {
+  explicit RoomKeyframe(const Pose2& T_map_robot) {
+    scan.max_range_m = 30.0;
+    for (int i = 0; i < 360; ++i) {
+      const double angle = -M_PI + 2.0 * M_PI * i / 360.0;
+      scan.angles_rad.push_back(angle);
+      scan.ranges_m.push_back(RangeToWall(T_map_robot.Translation(), T_map_robot.theta + angle));
+    }
+    view = {&scan, T_map_robot};
   }
-  return keyframe;
-}
+  RoomKeyframe(const RoomKeyframe&) = delete;  // the view points at this scan
+  RoomKeyframe& operator=(const RoomKeyframe&) = delete;
+  LaserScan scan;
+  ShapeSlam::KeyframeView view;
+};
 
 }  // namespace shape_slam::io::testing

@@ -64,8 +64,8 @@ TEST(CellsOnSegmentTest, MatchesDenseSamplingOnRandomSegments) {
 TEST(OccupancyGridTest, WallsOccupiedBeamsFreeOutsideUnknown) {
   OccupancyGridParams params;
   params.resolution_m = 0.05;
-  const OccupancyGrid grid =
-      BuildOccupancyGrid(RoomWalls(), {RoomKeyframe(Pose2(0.3, -0.2, 0.4))}, params);
+  const RoomKeyframe keyframe(Pose2(0.3, -0.2, 0.4));
+  const OccupancyGrid grid = BuildOccupancyGrid(RoomWalls(), {keyframe.view}, params);
   // Origin on a multiple of the resolution; the room plus the margin covered.
   EXPECT_NEAR(std::remainder(grid.origin_m.x(), 0.05), 0.0, 1e-9);
   EXPECT_LE(grid.origin_m.x(), -2.0 - params.margin_m + 1e-9);
@@ -91,10 +91,12 @@ TEST(OccupancyGridTest, WallsOccupiedBeamsFreeOutsideUnknown) {
 }
 
 TEST(OccupancyGridTest, BeamsWithoutReturnClearUpToTheCapAndNoReadingClearsNothing) {
+  LaserScan scan;
+  scan.max_range_m = 8.0;
+  scan.angles_rad = {0.0, M_PI / 2};
+  scan.ranges_m = {8.0, std::nan("")};  // no return along +x, no reading along +y
   ShapeSlam::KeyframeView keyframe;
-  keyframe.scan.max_range_m = 8.0;
-  keyframe.scan.angles_rad = {0.0, M_PI / 2};
-  keyframe.scan.ranges_m = {8.0, std::nan("")};  // no return along +x, no reading along +y
+  keyframe.scan = &scan;
   OccupancyGridParams params;
   params.resolution_m = 0.1;
   params.max_free_range_m = 1.5;

@@ -36,7 +36,8 @@ double DistanceToWalls(const Point2& p) {
 TEST(RosMapTest, RoundTripKeepsEveryCellAndTheGeometry) {
   OccupancyGridParams params;
   params.resolution_m = 0.05;
-  const ShapeSlam::KeyframeView keyframe = RoomKeyframe(Pose2(-0.5, 0.7, 1.0));
+  const RoomKeyframe room_keyframe(Pose2(-0.5, 0.7, 1.0));
+  const ShapeSlam::KeyframeView& keyframe = room_keyframe.view;
   const OccupancyGrid grid = BuildOccupancyGrid(RoomWalls(), {keyframe}, params);
   TempDir dir;
   WriteFileAtomically(dir.Path("map.pgm"), FormatPgm(grid));
@@ -68,9 +69,9 @@ TEST(RosMapTest, RoundTripKeepsEveryCellAndTheGeometry) {
   }
   EXPECT_GT(occupied, 300u);
   // Cells along every beam, short of its return, are free.
-  for (std::size_t i = 0; i < keyframe.scan.ranges_m.size(); i += 7) {
-    const double angle = keyframe.T_map_robot.theta + keyframe.scan.angles_rad[i];
-    for (double r = 0.0; r < keyframe.scan.ranges_m[i] - 0.1; r += 0.02) {
+  for (std::size_t i = 0; i < keyframe.scan->ranges_m.size(); i += 7) {
+    const double angle = keyframe.T_map_robot.theta + keyframe.scan->angles_rad[i];
+    for (double r = 0.0; r < keyframe.scan->ranges_m[i] - 0.1; r += 0.02) {
       const Point2 p =
           keyframe.T_map_robot.Translation() + r * Point2(std::cos(angle), std::sin(angle));
       const Eigen::Vector2i c = *loaded.CellOf(p);
