@@ -39,7 +39,8 @@ struct Drawing {
 /// The SVG document of a drawing.
 std::string RenderSvg(const Drawing& drawing);
 
-/// The PNG file content of a drawing (OpenCV, antialiased lines). Throws OutputError when
+/// The PNG file content of a drawing (OpenCV, antialiased lines), drawn in strips of rows and
+/// encoded row by row (zlib): a 4000-px picture never weighs 48 MB at once. Throws OutputError when
 /// encoding fails.
 std::string RenderPng(const Drawing& drawing);
 

@@ -7,6 +7,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <zlib.h>
 
 #include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/json_writer.h"
@@ -14,14 +15,16 @@
 namespace shape_slam::io {
 namespace {
 
-// Pixel frame of a drawing: world bounds, scale and the world->pixel mapping (y flipped).
+// Pixel frame of a drawing: world bounds, scale and the world->pixel mapping (y flipped). A PNG
+// is drawn in strips of rows: offset_y is the first row of the strip being drawn.
 struct Viewport {
   double min_x = 0, min_y = 0, max_x = 1, max_y = 1;
   double scale = 40.0;  // px per metre
   int width = 1, height = 1;
+  int offset_y = 0;
 
   double Px(double x) const { return (x - min_x) * scale; }
-  double Py(double y) const { return (max_y - y) * scale; }
+  double Py(double y) const { return (max_y - y) * scale - offset_y; }
 };
 
 Viewport MakeViewport(const Drawing& drawing) {
@@ -180,11 +183,11 @@ void PngLayer(const DrawingLayer& layer, const Viewport& v, cv::Mat& image) {
 
 void PngDecorations(const Drawing& drawing, const Viewport& v, cv::Mat& image) {
   const double bar = ScaleBarLength(v);
-  const int y = v.height - 12;
+  const int y = v.height - 12 - v.offset_y;
   cv::line(image, {10, y}, {10 + static_cast<int>(bar * v.scale), y}, cv::Scalar(0, 0, 0), 3);
   cv::putText(image, FormatDouble(bar) + " m", {10, y - 8}, cv::FONT_HERSHEY_SIMPLEX, 0.45,
               cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  int ly = 18;
+  int ly = 18 - v.offset_y;
   if (!drawing.title.empty()) {
     cv::putText(image, drawing.title, {10, ly}, cv::FONT_HERSHEY_SIMPLEX, 0.5, cv::Scalar(0, 0, 0),
                 1, cv::LINE_AA);
@@ -218,9 +221,10 @@ std::string RenderSvg(const Drawing& drawing) {
   return svg.str();
 }
 
-std::string RenderPng(const Drawing& drawing) {
-  const Viewport v = MakeViewport(drawing);
-  cv::Mat image(v.height, v.width, CV_8UC3, cv::Scalar(255, 255, 255));
+namespace {
+
+// The grid, the layers and the decorations, in the rows of `image` (v.offset_y on).
+void DrawPng(const Drawing& drawing, const Viewport& v, cv::Mat& image) {
   const double step = drawing.grid_spacing_m;
   const cv::Scalar grid(228, 228, 228);
   for (double x = std::ceil(v.min_x / step) * step; x <= v.max_x; x += step) {
@@ -233,9 +237,98 @@ std::string RenderPng(const Drawing& drawing) {
   }
   for (const DrawingLayer& layer : drawing.layers) PngLayer(layer, v, image);
   PngDecorations(drawing, v, image);
-  std::vector<unsigned char> bytes;
-  if (!cv::imencode(".png", image, bytes)) throw OutputError("PNG encoding failed");
-  return std::string(bytes.begin(), bytes.end());
+}
+
+// An 8-bit RGB PNG written row by row (zlib's deflate, no row filter): the picture never has to
+// be whole in memory.
+class PngEncoder {
+ public:
+  PngEncoder(int width, int height) : width_(width) {
+    out_ = std::string("\x89PNG\r\n\x1a\n", 8);
+    std::string header;
+    Put32(header, static_cast<std::uint32_t>(width));
+    Put32(header, static_cast<std::uint32_t>(height));
+    header += std::string("\x08\x02\x00\x00\x00", 5);  // 8 bits, RGB, deflate, no filter, no interlace
+    Chunk("IHDR", header);
+    if (deflateInit(&z_, Z_BEST_SPEED) != Z_OK) throw OutputError("PNG encoding failed");
+  }
+  ~PngEncoder() { deflateEnd(&z_); }
+  PngEncoder(const PngEncoder&) = delete;
+  PngEncoder& operator=(const PngEncoder&) = delete;
+
+  /// Rows of a BGR image (OpenCV's order), `width` pixels wide.
+  void AddRows(const cv::Mat& bgr) {
+    std::string row(1 + 3 * static_cast<std::size_t>(width_), '\0');  // filter byte 0: none
+    for (int r = 0; r < bgr.rows; ++r) {
+      const std::uint8_t* p = bgr.ptr<std::uint8_t>(r);
+      for (int x = 0; x < width_; ++x) {
+        row[1 + 3 * x] = static_cast<char>(p[3 * x + 2]);
+        row[2 + 3 * x] = static_cast<char>(p[3 * x + 1]);
+        row[3 + 3 * x] = static_cast<char>(p[3 * x]);
+      }
+      Deflate(row, Z_NO_FLUSH);
+    }
+  }
+  std::string Finish() {
+    Deflate({}, Z_FINISH);
+    Chunk("IEND", {});
+    return std::move(out_);
+  }
+
+ private:
+  static void Put32(std::string& s, std::uint32_t v) {
+    for (const int shift : {24, 16, 8, 0}) s += static_cast<char>((v >> shift) & 0xff);
+  }
+  void Chunk(const char* type, const std::string& data) {
+    Put32(out_, static_cast<std::uint32_t>(data.size()));
+    const std::size_t start = out_.size();
+    out_ += type;
+    out_ += data;
+    const auto* bytes = reinterpret_cast<const Bytef*>(out_.data() + start);
+    Put32(out_, static_cast<std::uint32_t>(crc32(0L, bytes, static_cast<uInt>(out_.size() - start))));
+  }
+  // Compresses `in` into IDAT chunks of up to 64 KiB; Z_FINISH flushes the stream.
+  void Deflate(const std::string& in, int flush) {
+    z_.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data()));
+    z_.avail_in = static_cast<uInt>(in.size());
+    int status = Z_OK;
+    do {
+      char buffer[1 << 16];
+      z_.next_out = reinterpret_cast<Bytef*>(buffer);
+      z_.avail_out = sizeof(buffer);
+      status = deflate(&z_, flush);
+      if (status == Z_STREAM_ERROR) throw OutputError("PNG encoding failed");
+      const std::size_t produced = sizeof(buffer) - z_.avail_out;
+      if (produced > 0) Chunk("IDAT", std::string(buffer, produced));
+    } while (z_.avail_out == 0 || (flush == Z_FINISH && status != Z_STREAM_END));
+  }
+
+  int width_;
+  z_stream z_{};
+  std::string out_;
+};
+
+// Strips of this many rows, each drawn with kStripPad rows more on either side so that lines
+// cut at a strip's edge are cut away from the rows kept.
+constexpr int kStripRows = 256;
+constexpr int kStripPad = 16;
+
+}  // namespace
+
+std::string RenderPng(const Drawing& drawing) {
+  const Viewport whole = MakeViewport(drawing);
+  PngEncoder png(whole.width, whole.height);
+  for (int y0 = 0; y0 < whole.height; y0 += kStripRows) {
+    const int rows = std::min(kStripRows, whole.height - y0);
+    const int top = std::max(0, y0 - kStripPad);
+    const int bottom = std::min(whole.height, y0 + rows + kStripPad);
+    Viewport v = whole;
+    v.offset_y = top;
+    cv::Mat strip(bottom - top, whole.width, CV_8UC3, cv::Scalar(255, 255, 255));
+    DrawPng(drawing, v, strip);
+    png.AddRows(strip.rowRange(y0 - top, y0 - top + rows));
+  }
+  return png.Finish();
 }
 
 }  // namespace shape_slam::io
