@@ -26,6 +26,7 @@ import math
 import random
 
 import carmen
+import trajectories
 from atomic import write_text
 
 NAMES = ["zero-odom", "every2", "noisy-odom", "half-beams", "fov120", "odom-glitch", "odom-bad",
@@ -316,13 +317,8 @@ def _write_relations(path, rows):
 
 def mirror_gt(path, out_path):
     """The reference poses (t x y theta) of the mirrored log: y and the heading negated."""
-    lines = []
-    with open(path) as f:
-        for line in f:
-            v = line.split()
-            if len(v) >= 4 and not v[0].startswith("#"):
-                lines.append(f"{v[0]} {v[1]} {fmt(-float(v[2]))} {fmt(-float(v[3]))}\n")
-    write_text(out_path, "".join(lines))
+    write_text(out_path, "".join(f"{fmt(t)} {fmt(x)} {fmt(-y)} {fmt(-theta)}\n"
+                                 for t, x, y, theta in trajectories.read_poses(path)))
 
 
 def mirror_relations(path, out_path):

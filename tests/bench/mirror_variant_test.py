@@ -53,8 +53,8 @@ def main():
         variants.write_variant("mirror", log, gt, rel, os.path.join(d, "m"))
         with open(os.path.join(d, "m.gt.txt")) as f:
             rows = [line.split() for line in f]
-        check(rows == [["1.000000", "1.0", "-2.000000", "-0.300000"],
-                       ["2.000000", "1.0", "2.000000", "0.300000"]], f"gt mirrored: {rows}")
+        check(rows == [["1.000000", "1.000000", "-2.000000", "-0.300000"],
+                       ["2.000000", "1.000000", "2.000000", "0.300000"]], f"gt mirrored: {rows}")
         with open(os.path.join(d, "m.relations")) as f:
             rows = [line.split() for line in f]
         check(rows == [["1.000000", "2.000000", "0.500000", "-0.250000", "0", "0", "0", "0.600000"]],
