@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
@@ -386,23 +387,33 @@ struct GridOutputs {
 };
 
 // The occupancy grids and the simple map, from the keyframes at their final corrected poses
-// (after the last pose-graph optimisation) and the map's polylines, each handed to
-// stage(name, content) as soon as it is rendered.
-template <typename Stage>
+// (after the last pose-graph optimisation) and the map's polylines, each staged as soon as it is
+// rendered: stage(name, content) for a content held whole, stage_stream(name, write) for one
+// written piece by piece (returns the temporary file). A large map's grid is tens of MB, so it is
+// held once at a time: map.pgm is written row by row from it; map.gridmap is made from map.pgm
+// read back, once the grid is released.
+template <typename Stage, typename StageStream>
 void StageGridOutputs(const ShapeSlam& slam, const std::vector<ShapeSlam::KeyframeView>& keyframes,
-                      const GridOutputs& what, const Stage& stage) {
+                      const GridOutputs& what, const Stage& stage, const StageStream& stage_stream) {
   if (what.ros || what.gridmap) {
     std::vector<Polyline> walls;
     for (const PolylineId id : slam.Map().Ids()) walls.push_back(slam.Map().Get(id).points);
     io::OccupancyGridParams params;
     params.resolution_m = what.resolution_m;
     io::OccupancyGrid grid = io::BuildOccupancyGrid(walls, keyframes, params);
+    std::string pgm_staged;
     if (what.ros) {
-      stage("map.pgm", io::FormatPgm(grid));
+      pgm_staged = stage_stream("map.pgm", [&](const io::ByteWriter& w) { io::WritePgm(grid, w); });
       stage("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
     }
 #if SHAPE_SLAM_HAVE_MRPT
-    if (what.gridmap) stage("map.gridmap", io::FormatMrptGridmap(std::move(grid)));
+    if (what.gridmap && what.ros) {
+      io::OccupancyGrid frame = std::move(grid);
+      std::vector<io::CellState>().swap(frame.cells);  // released: read back from map.pgm
+      stage("map.gridmap", io::FormatMrptGridmap(frame, pgm_staged));
+    } else if (what.gridmap) {
+      stage("map.gridmap", io::FormatMrptGridmap(std::move(grid)));
+    }
 #endif
   }
 #if SHAPE_SLAM_HAVE_MRPT
@@ -424,6 +435,12 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
     files.Stage((std::filesystem::path(dir) / name).string(), content);
     names.push_back(name);
   };
+  const auto stage_stream = [&](const std::string& name,
+                                const std::function<void(const io::ByteWriter&)>& write) {
+    std::string staged = files.Stage((std::filesystem::path(dir) / name).string(), write);
+    names.push_back(name);
+    return staged;
+  };
   stage("trajectory.tum", io::FormatTum(out.trajectory));
   stage("map.polylines", map_text);
   {
@@ -435,7 +452,7 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
   }
   // Every keyframe's scan at its final pose (views, not copies) for the grids and loops.csv.
   const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
-  StageGridOutputs(slam, keyframes, grids, stage);
+  StageGridOutputs(slam, keyframes, grids, stage, stage_stream);
   stage("scan_times.csv", FormatScanTimes(out));
   stage("loops.csv", FormatLoops(slam, keyframes));
   stage("stats.json", stats_json);

@@ -3,8 +3,10 @@
 // never destroys what was at the target before.
 #pragma once
 
+#include <functional>
 #include <stdexcept>
 #include <string>
+#include <string_view>
 #include <utility>
 #include <vector>
 
@@ -20,6 +22,9 @@ class OutputError : public std::runtime_error {
 /// rename). Throws OutputError; on failure the temporary file is removed and `path` untouched.
 void WriteFileAtomically(const std::string& path, const std::string& content);
 
+/// Takes the next piece of an output's content (StagedFiles::Stage with a writer).
+using ByteWriter = std::function<void(std::string_view bytes)>;
+
 /// Files replaced together, without holding their contents in memory: Stage writes a file's
 /// content to a temporary file beside its target (flushed to disk, as WriteFileAtomically);
 /// Commit renames every staged file over its target, in the order staged. Temporary files not
@@ -33,6 +38,11 @@ class StagedFiles {
   ~StagedFiles();
 
   void Stage(const std::string& path, const std::string& content);
+  /// As Stage(path, content), the content handed piece by piece by `write` to the writer it is
+  /// given (buffered), so that a large output need never be held whole. An exception from
+  /// `write` removes the temporary file and propagates. Returns the temporary file's path: it
+  /// can be read back until Commit.
+  std::string Stage(const std::string& path, const std::function<void(const ByteWriter&)>& write);
   void Commit();
 
  private:

@@ -26,6 +26,12 @@ namespace shape_slam::io {
 /// serialization: a caller done with it moves it in (a large map's grid is tens of MB).
 std::string FormatMrptGridmap(OccupancyGrid grid);
 
+/// The same content, the cells read back from `pgm_path`, the image that WritePgm (ros_map.h)
+/// wrote for a grid of `frame`'s size, resolution and origin (its cells are not used): only
+/// MRPT's map is in memory, not the grid as well. Throws OutputError, MapFileError for an
+/// image that is not that grid's.
+std::string FormatMrptGridmap(const OccupancyGrid& frame, const std::string& pgm_path);
+
 /// The simplemap file content of the keyframes (ShapeSlam::Keyframes()). Throws LogError for a
 /// scan an MRPT 2D range scan cannot hold (rawlog_writer.h), OutputError when compressing fails.
 std::string FormatMrptSimplemap(const std::vector<ShapeSlam::KeyframeView>& keyframes);

@@ -12,8 +12,11 @@
 // occupied when p > occupied_thresh, free when p < free_thresh, unknown otherwise.
 #pragma once
 
+#include <functional>
 #include <string>
+#include <vector>
 
+#include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/occupancy_grid.h"
 
 namespace shape_slam::io {
@@ -24,6 +27,17 @@ constexpr unsigned char kPgmUnknown = 205;
 
 /// The PGM file content of the grid.
 std::string FormatPgm(const OccupancyGrid& grid);
+
+/// The same content handed to `write` a row at a time (StagedFiles::Stage): a large grid's
+/// image is never held whole.
+void WritePgm(const OccupancyGrid& grid, const ByteWriter& write);
+
+/// Reads back, a row at a time, the PGM that WritePgm wrote for a grid of `frame`'s width and
+/// height (its cells are not used): `row(iy, cells)` for each row from the top (iy = height - 1)
+/// down to iy = 0, so that a grid can be remade without the whole of it in memory. Throws
+/// MapFileError naming the file when it cannot be read, is not such a PGM or is truncated.
+void ReadPgmRows(const std::string& path, const OccupancyGrid& frame,
+                 const std::function<void(int iy, const std::vector<CellState>& cells)>& row);
 
 /// The YAML file content for the grid, naming `image_file` (e.g. "map.pgm").
 std::string FormatMapYaml(const OccupancyGrid& grid, const std::string& image_file);

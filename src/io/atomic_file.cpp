@@ -15,7 +15,7 @@ namespace {
 std::string Reason() { return std::strerror(errno); }
 
 // Writes all of `content` to `fd`, retrying on short writes and EINTR.
-bool WriteAll(int fd, const std::string& content) {
+bool WriteAll(int fd, std::string_view content) {
   const char* data = content.data();
   std::size_t left = content.size();
   while (left > 0) {
@@ -28,9 +28,11 @@ bool WriteAll(int fd, const std::string& content) {
   return true;
 }
 
-// Writes `content` to a new temporary file beside `path` (mode 0644, flushed to disk) and
-// returns its name. Throws OutputError; on failure nothing is left behind.
-std::string WriteTemporary(const std::string& path, const std::string& content) {
+// Writes what `write` hands its writer to a new temporary file beside `path` (mode 0644, in
+// pieces of up to 64 KiB, flushed to disk) and returns its name. Throws OutputError, or what
+// `write` throws; on failure nothing is left behind.
+std::string WriteTemporary(const std::string& path,
+                           const std::function<void(const ByteWriter&)>& write) {
   namespace fs = std::filesystem;
   std::error_code ec;
   if (fs::is_directory(path, ec)) throw OutputError(path + ": is a directory, cannot write a file");
@@ -39,15 +41,41 @@ std::string WriteTemporary(const std::string& path, const std::string& content) 
   std::string tmpl = (dir / ("." + target.filename().string() + ".tmp-XXXXXX")).string();
   const int fd = ::mkstemp(tmpl.data());
   if (fd < 0) throw OutputError(path + ": cannot create a temporary file: " + Reason());
-  // mkstemp creates the file 0600; outputs are ordinary files readable by others.
-  const bool ok = ::fchmod(fd, 0644) == 0 && WriteAll(fd, content) && ::fsync(fd) == 0;
-  const std::string write_reason = ok ? "" : Reason();
+  constexpr std::size_t kBuffer = 1 << 16;
+  std::string buffer;
+  bool ok = ::fchmod(fd, 0644) == 0;  // mkstemp creates the file 0600; outputs are ordinary files
+  std::string reason = ok ? "" : Reason();
+  const auto flush = [&] {
+    if (ok && !WriteAll(fd, buffer)) ok = false, reason = Reason();
+    buffer.clear();
+  };
+  try {
+    write([&](std::string_view bytes) {
+      if (buffer.size() + bytes.size() > kBuffer) flush();
+      if (bytes.size() >= kBuffer) {
+        if (ok && !WriteAll(fd, bytes)) ok = false, reason = Reason();
+      } else {
+        buffer.append(bytes);
+      }
+    });
+  } catch (...) {
+    ::close(fd);
+    ::unlink(tmpl.c_str());
+    throw;
+  }
+  flush();
+  if (ok && ::fsync(fd) != 0) ok = false, reason = Reason();
   const bool closed = ::close(fd) == 0;
   if (!ok || !closed) {
+    if (ok) reason = Reason();
     ::unlink(tmpl.c_str());
-    throw OutputError(path + ": write failed: " + (ok ? Reason() : write_reason));
+    throw OutputError(path + ": write failed: " + reason);
   }
   return tmpl;
+}
+
+std::string WriteTemporary(const std::string& path, const std::string& content) {
+  return WriteTemporary(path, [&](const ByteWriter& writer) { writer(content); });
 }
 
 // Renames the temporary file over `path`; on failure removes it and throws OutputError.
@@ -71,6 +99,12 @@ StagedFiles::~StagedFiles() {
 
 void StagedFiles::Stage(const std::string& path, const std::string& content) {
   staged_.emplace_back(WriteTemporary(path, content), path);
+}
+
+std::string StagedFiles::Stage(const std::string& path,
+                               const std::function<void(const ByteWriter&)>& write) {
+  staged_.emplace_back(WriteTemporary(path, write), path);
+  return staged_.back().first;
 }
 
 void StagedFiles::Commit() {

@@ -15,6 +15,7 @@
 
 #include "mrpt_scan_internal.h"
 #include "shape_slam_io/atomic_file.h"
+#include "shape_slam_io/ros_map.h"
 
 namespace shape_slam::io {
 namespace {
@@ -94,25 +95,39 @@ float FreeProbability(CellState state) {
   return 0.5f;
 }
 
+/// MRPT's map of the grid's size, resolution and origin, every cell unknown.
+mrpt::maps::COccupancyGridMap2D EmptyMrptGrid(const OccupancyGrid& frame) {
+  const double res = frame.resolution_m;
+  mrpt::maps::COccupancyGridMap2D map;
+  map.setSize(static_cast<float>(frame.origin_m.x()),
+              static_cast<float>(frame.origin_m.x() + frame.width * res),
+              static_cast<float>(frame.origin_m.y()),
+              static_cast<float>(frame.origin_m.y() + frame.height * res), static_cast<float>(res));
+  if (map.getSizeX() != static_cast<unsigned>(frame.width) ||
+      map.getSizeY() != static_cast<unsigned>(frame.height)) {
+    throw OutputError("the MRPT grid map has " + std::to_string(map.getSizeX()) + " x " +
+                      std::to_string(map.getSizeY()) + " cells instead of " +
+                      std::to_string(frame.width) + " x " + std::to_string(frame.height));
+  }
+  return map;
+}
+
 }  // namespace
 
 std::string FormatMrptGridmap(OccupancyGrid grid) {
-  const double res = grid.resolution_m;
-  mrpt::maps::COccupancyGridMap2D map;
-  map.setSize(static_cast<float>(grid.origin_m.x()),
-              static_cast<float>(grid.origin_m.x() + grid.width * res),
-              static_cast<float>(grid.origin_m.y()),
-              static_cast<float>(grid.origin_m.y() + grid.height * res), static_cast<float>(res));
-  if (map.getSizeX() != static_cast<unsigned>(grid.width) ||
-      map.getSizeY() != static_cast<unsigned>(grid.height)) {
-    throw OutputError("the MRPT grid map has " + std::to_string(map.getSizeX()) + " x " +
-                      std::to_string(map.getSizeY()) + " cells instead of " +
-                      std::to_string(grid.width) + " x " + std::to_string(grid.height));
-  }
+  mrpt::maps::COccupancyGridMap2D map = EmptyMrptGrid(grid);
   for (int iy = 0; iy < grid.height; ++iy) {
     for (int ix = 0; ix < grid.width; ++ix) map.setCell(ix, iy, FreeProbability(grid.At(ix, iy)));
   }
   grid = OccupancyGrid();
+  return GzipSerialized(map, "grid map");
+}
+
+std::string FormatMrptGridmap(const OccupancyGrid& frame, const std::string& pgm_path) {
+  mrpt::maps::COccupancyGridMap2D map = EmptyMrptGrid(frame);
+  ReadPgmRows(pgm_path, frame, [&](int iy, const std::vector<CellState>& cells) {
+    for (int ix = 0; ix < frame.width; ++ix) map.setCell(ix, iy, FreeProbability(cells[ix]));
+  });
   return GzipSerialized(map, "grid map");
 }
 

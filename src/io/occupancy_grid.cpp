@@ -81,14 +81,14 @@ void Set(OccupancyGrid& grid, const Eigen::Vector2i& cell, CellState state) {
 
 /// The cells a ray clears: up to its return, the return's own cell excluded; a ray without
 /// return stops at the first wall it meets (the laser saw through it: glass, or a grazing beam).
-std::vector<Eigen::Vector2i> FreeCells(const OccupancyGrid& walls, const Ray& ray) {
-  std::vector<Eigen::Vector2i> cells = CellsOnSegment(walls, ray.from, ray.to);
+std::vector<Eigen::Vector2i> FreeCells(const OccupancyGrid& grid, const Ray& ray) {
+  std::vector<Eigen::Vector2i> cells = CellsOnSegment(grid, ray.from, ray.to);
   if (ray.hit) {
     if (!cells.empty()) cells.pop_back();
     return cells;
   }
   const auto wall = std::find_if(cells.begin(), cells.end(), [&](const Eigen::Vector2i& c) {
-    return walls.At(c.x(), c.y()) == CellState::kOccupied;
+    return grid.At(c.x(), c.y()) == CellState::kOccupied;
   });
   cells.erase(wall, cells.end());
   return cells;
@@ -152,30 +152,29 @@ std::vector<Eigen::Vector2i> CellsOnSegment(const OccupancyGrid& grid, const Poi
   return cells;
 }
 
+// One grid throughout (a second, walls-only copy would double the peak memory of a large map):
+// the walls first, then the rays clear what is not a wall; a ray without return stops at the
+// first wall cell, which only walls have, since clearing never touches them.
 OccupancyGrid BuildOccupancyGrid(const std::vector<Polyline>& walls,
                                  const std::vector<ShapeSlam::KeyframeView>& keyframes,
                                  const OccupancyGridParams& params) {
   params.Validate();
   const auto [min, max] = BoundingBox(walls, keyframes, params.max_free_range_m);
-  OccupancyGrid walls_only = EmptyGrid(min, max, params);
+  OccupancyGrid grid = EmptyGrid(min, max, params);
   for (const Polyline& wall : walls) {
     for (std::size_t i = 0; i < wall.size(); ++i) {
       const Point2& next = wall[std::min(i + 1, wall.size() - 1)];
-      for (const Eigen::Vector2i& cell : CellsOnSegment(walls_only, wall[i], next)) {
-        Set(walls_only, cell, CellState::kOccupied);
+      for (const Eigen::Vector2i& cell : CellsOnSegment(grid, wall[i], next)) {
+        Set(grid, cell, CellState::kOccupied);
       }
     }
   }
-  OccupancyGrid grid = walls_only;
   for (const ShapeSlam::KeyframeView& keyframe : keyframes) {
     for (const Ray& ray : RaysOf(keyframe, params.max_free_range_m)) {
-      for (const Eigen::Vector2i& cell : FreeCells(walls_only, ray)) {
-        Set(grid, cell, CellState::kFree);
+      for (const Eigen::Vector2i& cell : FreeCells(grid, ray)) {
+        if (grid.At(cell.x(), cell.y()) != CellState::kOccupied) Set(grid, cell, CellState::kFree);
       }
     }
-  }
-  for (std::size_t i = 0; i < grid.cells.size(); ++i) {
-    if (walls_only.cells[i] == CellState::kOccupied) grid.cells[i] = CellState::kOccupied;
   }
   return grid;
 }

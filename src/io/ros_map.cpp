@@ -1,5 +1,6 @@
 #include "shape_slam_io/ros_map.h"
 
+#include <algorithm>
 #include <cctype>
 #include <cmath>
 #include <filesystem>
@@ -96,20 +97,63 @@ PgmImage ParsePgm(const std::string& data, const std::string& path) {
   return image;
 }
 
+std::string PgmHeader(const OccupancyGrid& grid) {
+  return "P5\n# shape-slam occupancy grid, resolution " +
+         internal::FormatNumber(grid.resolution_m) + " m\n" + std::to_string(grid.width) + " " +
+         std::to_string(grid.height) + "\n255\n";
+}
+
 }  // namespace
 
-std::string FormatPgm(const OccupancyGrid& grid) {
-  std::string pgm = "P5\n# shape-slam occupancy grid, resolution " +
-                    internal::FormatNumber(grid.resolution_m) + " m\n" +
-                    std::to_string(grid.width) + " " + std::to_string(grid.height) + "\n255\n";
-  pgm.reserve(pgm.size() + grid.cells.size());
+void WritePgm(const OccupancyGrid& grid, const ByteWriter& write) {
+  write(PgmHeader(grid));
+  std::string pixels(static_cast<std::size_t>(std::max(grid.width, 0)), '\0');
   for (int row = 0; row < grid.height; ++row) {
     const int iy = grid.height - 1 - row;  // the first row is the top (highest y)
-    for (int ix = 0; ix < grid.width; ++ix) {
-      pgm.push_back(static_cast<char>(PixelOf(grid.At(ix, iy))));
-    }
+    for (int ix = 0; ix < grid.width; ++ix) pixels[ix] = static_cast<char>(PixelOf(grid.At(ix, iy)));
+    write(pixels);
   }
+}
+
+std::string FormatPgm(const OccupancyGrid& grid) {
+  std::string pgm;
+  pgm.reserve(PgmHeader(grid).size() + grid.cells.size());
+  WritePgm(grid, [&](std::string_view bytes) { pgm.append(bytes); });
   return pgm;
+}
+
+void ReadPgmRows(const std::string& path, const OccupancyGrid& frame,
+                 const std::function<void(int iy, const std::vector<CellState>& cells)>& row) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw MapFileError(path + ": cannot open");
+  const std::string header = PgmHeader(frame);
+  std::string read(header.size(), '\0');
+  if (!in.read(read.data(), static_cast<std::streamsize>(read.size())) || read != header) {
+    throw MapFileError(path + ": not the PGM written for a grid of " +
+                       std::to_string(frame.width) + " x " + std::to_string(frame.height) +
+                       " cells");
+  }
+  std::string pixels(static_cast<std::size_t>(std::max(frame.width, 0)), '\0');
+  std::vector<CellState> cells(pixels.size());
+  for (int iy = frame.height - 1; iy >= 0; --iy) {
+    if (!in.read(pixels.data(), static_cast<std::streamsize>(pixels.size()))) {
+      throw MapFileError(path + ": PGM pixel data is truncated");
+    }
+    for (std::size_t ix = 0; ix < pixels.size(); ++ix) {
+      const auto pixel = static_cast<unsigned char>(pixels[ix]);
+      if (pixel == kPgmOccupied) {
+        cells[ix] = CellState::kOccupied;
+      } else if (pixel == kPgmFree) {
+        cells[ix] = CellState::kFree;
+      } else if (pixel == kPgmUnknown) {
+        cells[ix] = CellState::kUnknown;
+      } else {
+        throw MapFileError(path + ": pixel value " + std::to_string(pixel) +
+                           " is none of occupied, free, unknown");
+      }
+    }
+    row(iy, cells);
+  }
 }
 
 std::string FormatMapYaml(const OccupancyGrid& grid, const std::string& image_file) {

@@ -4,6 +4,8 @@
 #include <sys/stat.h>
 
 #include <filesystem>
+#include <stdexcept>
+#include <string>
 
 #include "io/test_files.h"
 
@@ -84,6 +86,34 @@ TEST(AtomicFileTest, StagedFilesReplaceTheirTargetsTogether) {
   struct stat st {};
   ASSERT_EQ(::stat(b.c_str(), &st), 0);
   EXPECT_EQ(st.st_mode & 0777, 0644u);
+}
+
+// A file staged piece by piece holds every piece in order (pieces smaller and larger than the
+// writer's buffer), can be read back before Commit, and a writer that throws leaves nothing.
+TEST(AtomicFileTest, StagedStreamHoldsEveryPieceAndFailsCleanly) {
+  TempDir dir;
+  const std::string target = dir.Write("big.bin", "old");
+  std::string expected;
+  StagedFiles files;
+  const std::string staged = files.Stage(target, [&](const ByteWriter& write) {
+    for (int i = 0; i < 300; ++i) {
+      const std::string piece(static_cast<std::size_t>(i * i % 70001), static_cast<char>('a' + i % 26));
+      write(piece);
+      expected += piece;
+    }
+  });
+  EXPECT_GT(expected.size(), std::size_t{1} << 16);
+  EXPECT_EQ(ReadFile(staged), expected);
+  EXPECT_EQ(ReadFile(target), "old");
+  const auto failing = [](const ByteWriter& write) {
+    write(std::string(100000, 'x'));
+    throw std::runtime_error("renderer failed");
+  };
+  EXPECT_THROW(files.Stage(dir.Path("other.bin"), failing), std::runtime_error);
+  EXPECT_EQ(CountFiles(dir.path()), 2);  // big.bin and its staged file, nothing of other.bin
+  files.Commit();
+  EXPECT_EQ(ReadFile(target), expected);
+  EXPECT_EQ(CountFiles(dir.path()), 1);
 }
 
 TEST(AtomicFileTest, EnsureDirectoryCreatesParentsAndRejectsFiles) {

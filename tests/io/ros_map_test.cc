@@ -6,11 +6,15 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 #include "io/grid_scene.h"
 #include "io/test_files.h"
 #include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/map_file.h"
+#ifdef SHAPE_SLAM_HAVE_MRPT
+#include "shape_slam_io/mrpt_maps.h"
+#endif
 
 namespace shape_slam::io {
 namespace {
@@ -95,6 +99,73 @@ TEST(RosMapTest, FirstImageRowIsTheTopOfTheMap) {
   EXPECT_EQ(static_cast<unsigned char>(pixels[1]), kPgmUnknown);
   EXPECT_EQ(static_cast<unsigned char>(pixels[5]), kPgmFree);
 }
+
+// map.pgm written row by row is FormatPgm's content; read back row by row it gives every cell
+// of the grid, each row once, from the top; an image of another grid, a truncated one and a
+// pixel that is no cell state are errors naming the file.
+TEST(RosMapTest, RowByRowWritingAndReadingKeepEveryCell) {
+  OccupancyGridParams params;
+  params.resolution_m = 0.05;
+  const RoomKeyframe room_keyframe(Pose2(0.3, -0.2, 0.4));
+  const OccupancyGrid grid = BuildOccupancyGrid(RoomWalls(), {room_keyframe.view}, params);
+  TempDir dir;
+  StagedFiles files;
+  const std::string staged =
+      files.Stage(dir.Path("map.pgm"), [&](const ByteWriter& write) { WritePgm(grid, write); });
+  EXPECT_EQ(ReadFile(staged), FormatPgm(grid));
+
+  OccupancyGrid frame = grid;
+  frame.cells.clear();
+  OccupancyGrid read = frame;
+  read.cells.assign(grid.cells.size(), CellState::kOccupied);
+  std::vector<int> rows;
+  ReadPgmRows(staged, frame, [&](int iy, const std::vector<CellState>& cells) {
+    ASSERT_EQ(cells.size(), static_cast<std::size_t>(grid.width));
+    std::copy(cells.begin(), cells.end(), read.cells.begin() + static_cast<long>(iy) * grid.width);
+    rows.push_back(iy);
+  });
+  EXPECT_EQ(read.cells, grid.cells);
+  ASSERT_EQ(rows.size(), static_cast<std::size_t>(grid.height));
+  EXPECT_EQ(rows.front(), grid.height - 1);
+  EXPECT_EQ(rows.back(), 0);
+
+  const auto fails_naming = [&](const std::string& path, const OccupancyGrid& g) {
+    try {
+      ReadPgmRows(path, g, [](int, const std::vector<CellState>&) {});
+      ADD_FAILURE() << path << " must not be read";
+    } catch (const MapFileError& e) {
+      EXPECT_NE(std::string(e.what()).find(path), std::string::npos) << e.what();
+    }
+  };
+  OccupancyGrid wider = frame;
+  wider.width += 1;
+  fails_naming(staged, wider);
+  const std::string pgm = FormatPgm(grid);
+  fails_naming(dir.Write("short.pgm", pgm.substr(0, pgm.size() - 1)), frame);
+  std::string odd = pgm;
+  odd.back() = static_cast<char>(100);
+  fails_naming(dir.Write("odd.pgm", odd), frame);
+  fails_naming(dir.Path("none.pgm"), frame);
+}
+
+#ifdef SHAPE_SLAM_HAVE_MRPT
+// map.gridmap made from map.pgm read back (what `run` does, so that the grid and MRPT's map are
+// never both in memory) is the gridmap made from the grid itself, byte for byte.
+TEST(RosMapTest, GridmapFromThePgmIsTheGridsGridmap) {
+  OccupancyGridParams params;
+  params.resolution_m = 0.05;
+  const RoomKeyframe room_keyframe(Pose2(-0.4, 0.1, -2.0));
+  const OccupancyGrid grid = BuildOccupancyGrid(RoomWalls(), {room_keyframe.view}, params);
+  TempDir dir;
+  const std::string pgm = dir.Write("map.pgm", FormatPgm(grid));
+  OccupancyGrid frame = grid;
+  frame.cells.clear();
+  EXPECT_EQ(FormatMrptGridmap(frame, pgm), FormatMrptGridmap(grid));
+  OccupancyGrid moved = grid;
+  moved.origin_m.x() += 0.05;  // another grid's frame: another map
+  EXPECT_NE(FormatMrptGridmap(moved, pgm), FormatMrptGridmap(grid));
+}
+#endif
 
 TEST(RosMapTest, MissingOrBrokenFilesAreErrorsNamingTheFile) {
   TempDir dir;
