@@ -303,7 +303,7 @@ std::string FormatScanTimes(const RunOutput& out) {
 // Every loop closure found, what became of it (LoopDecision) and its numbers; keyframes by
 // index and by their scans' timestamps (bench/tools/loop_errors.py scores them against
 // reference poses).
-std::string FormatLoops(const ShapeSlam& slam,
+std::string FormatLoops(const std::vector<LoopEvent>& events,
                         const std::vector<ShapeSlam::KeyframeView>& keyframes) {
   std::ostringstream csv;
   csv << "new_keyframe,old_keyframe,new_timestamp_s,old_timestamp_s,decision,edge_x_m,edge_y_m,"
@@ -313,7 +313,7 @@ std::string FormatLoops(const ShapeSlam& slam,
   const auto stamp = [&](int k) {
     return k >= 0 && k < static_cast<int>(keyframes.size()) ? keyframes[k].scan->timestamp_s : 0.0;
   };
-  for (const LoopEvent& event : slam.LoopEvents()) {
+  for (const LoopEvent& event : events) {
     const LoopClosure& c = event.closure;
     csv << c.new_keyframe << ',' << c.old_keyframe << ',' << std::setprecision(6)
         << stamp(c.new_keyframe) << ',' << stamp(c.old_keyframe) << ','
@@ -378,6 +378,21 @@ std::string StatsJson(const RunOutput& out, const PolylineMap& map, std::size_t 
   return json.str() + "\n";
 }
 
+// Memory freed (in the middle of the heap as well) goes back to the system, so that what is
+// allocated next (a grid of tens of MB is a fresh mapping) does not add to it in the peak.
+void ReturnFreedMemory() {
+#if defined(__linux__) && defined(__GLIBC__)
+  ::malloc_trim(0);
+#endif
+}
+
+// The map's polylines (a copy, to be let go of once the grid is made).
+std::vector<Polyline> Walls(const PolylineMap& map) {
+  std::vector<Polyline> walls;
+  for (const PolylineId id : map.Ids()) walls.push_back(map.Get(id).points);
+  return walls;
+}
+
 /// Which grid outputs to write, and their cell size.
 struct GridOutputs {
   bool ros = true;        // map.pgm + map.yaml
@@ -386,48 +401,52 @@ struct GridOutputs {
   double resolution_m = 0.05;
 };
 
-// The occupancy grids and the simple map, from the keyframes at their final corrected poses
-// (after the last pose-graph optimisation) and the map's polylines, each staged as soon as it is
-// rendered: stage(name, content) for a content held whole, stage_stream(name, write) for one
-// written piece by piece (returns the temporary file). A large map's grid is tens of MB, so it is
-// held once at a time: map.pgm is written row by row from it; map.gridmap is made from map.pgm
-// read back, once the grid is released.
+// The occupancy grids, from the map's polylines and the keyframes at their final corrected poses
+// (after the last pose-graph optimisation), each staged as soon as it is rendered:
+// stage(name, content) for a content held whole, stage_stream(name, write) for one written
+// piece by piece (returns the temporary file). A large map's grid is tens of MB, so it is held
+// once at a time and alone: the map and the keyframes are released once the grid is made,
+// map.pgm is written row by row from it, and map.gridmap is made from map.pgm read back once
+// the grid is released too.
 template <typename Stage, typename StageStream>
-void StageGridOutputs(const ShapeSlam& slam, const std::vector<ShapeSlam::KeyframeView>& keyframes,
-                      const GridOutputs& what, const Stage& stage, const StageStream& stage_stream) {
-  if (what.ros || what.gridmap) {
-    std::vector<Polyline> walls;
-    for (const PolylineId id : slam.Map().Ids()) walls.push_back(slam.Map().Get(id).points);
-    io::OccupancyGridParams params;
-    params.resolution_m = what.resolution_m;
-    io::OccupancyGrid grid = io::BuildOccupancyGrid(walls, keyframes, params);
-    std::string pgm_staged;
-    if (what.ros) {
-      pgm_staged = stage_stream("map.pgm", [&](const io::ByteWriter& w) { io::WritePgm(grid, w); });
-      stage("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
-    }
-#if SHAPE_SLAM_HAVE_MRPT
-    if (what.gridmap && what.ros) {
-      io::OccupancyGrid frame = std::move(grid);
-      std::vector<io::CellState>().swap(frame.cells);  // released: read back from map.pgm
-      stage("map.gridmap", io::FormatMrptGridmap(frame, pgm_staged));
-    } else if (what.gridmap) {
-      stage("map.gridmap", io::FormatMrptGridmap(std::move(grid)));
-    }
-#endif
+void StageGridOutputs(ShapeSlam::Result result, const GridOutputs& what, const Stage& stage,
+                      const StageStream& stage_stream) {
+  if (!what.ros && !what.gridmap) return;
+  io::OccupancyGridParams params;
+  params.resolution_m = what.resolution_m;
+  io::OccupancyGrid grid;
+  {
+    const std::vector<Polyline> walls = Walls(result.map);
+    result.map = PolylineMap();  // its spatial index weighs more than its polylines
+    ReturnFreedMemory();
+    grid = io::BuildOccupancyGrid(walls, result.KeyframeViews(), params);
+  }
+  result = ShapeSlam::Result();
+  ReturnFreedMemory();
+  std::string pgm_staged;
+  if (what.ros) {
+    pgm_staged = stage_stream("map.pgm", [&](const io::ByteWriter& w) { io::WritePgm(grid, w); });
+    stage("map.yaml", io::FormatMapYaml(grid, "map.pgm"));
   }
 #if SHAPE_SLAM_HAVE_MRPT
-  if (what.simplemap) stage("map.simplemap", io::FormatMrptSimplemap(keyframes));
+  if (what.gridmap && what.ros) {
+    io::OccupancyGrid frame = std::move(grid);
+    std::vector<io::CellState>().swap(frame.cells);  // released: read back from map.pgm
+    stage("map.gridmap", io::FormatMrptGridmap(frame, pgm_staged));
+  } else if (what.gridmap) {
+    stage("map.gridmap", io::FormatMrptGridmap(std::move(grid)));
+  }
 #endif
 }
 
 // Every file is written to a temporary file as soon as it is rendered (so that only one
 // rendering is in memory at a time: the grids of a large map are tens of MB), and all replace
 // their targets only once every one is written: a failure leaves the directory as it was.
-// Returns the names written, in order.
+// The result is released as the outputs that need it are made (the grids last). Returns the
+// names written, in order.
 std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& out,
-                                      const ShapeSlam& slam, const GridOutputs& grids,
-                                      const std::string& stats_json, const std::string& map_text,
+                                      ShapeSlam::Result result, const GridOutputs& grids,
+                                      const std::string& stats_json, std::string map_text,
                                       const std::string& title) {
   io::StagedFiles files;
   std::vector<std::string> names;
@@ -443,18 +462,24 @@ std::vector<std::string> WriteOutputs(const std::string& dir, const RunOutput& o
   };
   stage("trajectory.tum", io::FormatTum(out.trajectory));
   stage("map.polylines", map_text);
+  std::string().swap(map_text);  // staged: not held while the grids are made
   {
     std::vector<Point2> path;
     for (const StampedPose& p : out.trajectory) path.push_back(p.pose.Translation());
-    const io::Drawing drawing = io::MakeMapDrawing(slam.Map(), path, title);
+    const io::Drawing drawing = io::MakeMapDrawing(result.map, path, title);
     stage("map.svg", io::RenderSvg(drawing));
     stage("map.png", io::RenderPng(drawing));
   }
-  // Every keyframe's scan at its final pose (views, not copies) for the grids and loops.csv.
-  const std::vector<ShapeSlam::KeyframeView> keyframes = slam.Keyframes();
-  StageGridOutputs(slam, keyframes, grids, stage, stage_stream);
+  {
+    // Every keyframe's scan at its final pose (views, not copies).
+    const std::vector<ShapeSlam::KeyframeView> keyframes = result.KeyframeViews();
+#if SHAPE_SLAM_HAVE_MRPT
+    if (grids.simplemap) stage("map.simplemap", io::FormatMrptSimplemap(keyframes));
+#endif
+    stage("loops.csv", FormatLoops(result.loop_events, keyframes));
+  }
   stage("scan_times.csv", FormatScanTimes(out));
-  stage("loops.csv", FormatLoops(slam, keyframes));
+  StageGridOutputs(std::move(result), grids, stage, stage_stream);
   stage("stats.json", stats_json);
   files.Commit();
   return names;
@@ -509,22 +534,25 @@ int RunRun(const Args& args) {
   } else {
     mapper = std::make_unique<ShapeSlam>(params);
   }
-  ShapeSlam& slam = *mapper;
   SetFatalContext("mapping the log " + log.substr(0, 400));
-  RunOutput out = RunMapper(slam, scans, quiet);
+  RunOutput out = RunMapper(*mapper, scans, quiet);
   out.first_scan = start ? start->first.scan : 0;
   std::vector<LaserScan>().swap(scans);  // the keyframes keep what the outputs need
-#if defined(__linux__) && defined(__GLIBC__)
-  ::malloc_trim(0);  // what mapping freed goes back to the system before the grids are made
-#endif
-  const std::string map_text = io::FormatMapFile(slam.Map());
+  // The outputs need the map and the keyframes, not the mapping state (submaps, shapes, graph).
+  ShapeSlam::Result result = std::move(*mapper).TakeResult();
+  mapper.reset();
+  ReturnFreedMemory();  // what mapping freed, before the outputs are made
+  std::string map_text = io::FormatMapFile(result.map);
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  const std::string stats =
-      StatsJson(out, slam.Map(), map_text.size(), wall_s, *reader, params, slam.Odometry(), start);
+  const std::string stats = StatsJson(out, result.map, map_text.size(), wall_s, *reader, params,
+                                      result.odometry, start);
+  const OdometryReport odometry = result.odometry;
+  const std::size_t polylines = result.map.NumPolylines(), vertices = result.map.NumVertices();
   const std::vector<std::string> written = WriteOutputs(
-      out_dir, out, slam, grids, stats, map_text, std::filesystem::path(log).filename().string());
-  ReportRunIssues(out, slam.Odometry(), params.use_odometry);
+      out_dir, out, std::move(result), grids, stats, std::move(map_text),
+      std::filesystem::path(log).filename().string());
+  ReportRunIssues(out, odometry, params.use_odometry);
   if (!quiet && start) {
     std::cout << std::fixed << std::setprecision(2) << "continued the map " << start->path << " ("
               << start->polylines << " polylines) from scan " << start->first.scan << " at ("
@@ -535,8 +563,7 @@ int RunRun(const Args& args) {
     std::cout << std::fixed << std::setprecision(2) << "mapped " << out.trajectory.size()
               << " scans in " << out.processing_s << " s (median "
               << Percentile(out.scan_ms, 0.5) << " ms/scan), " << out.matched
-              << " matched, map: " << slam.Map().NumPolylines() << " polylines, "
-              << slam.Map().NumVertices() << " vertices\n"
+              << " matched, map: " << polylines << " polylines, " << vertices << " vertices\n"
               << "outputs in " << out_dir << "/ (";
     for (std::size_t i = 0; i < written.size(); ++i) std::cout << (i ? ", " : "") << written[i];
     std::cout << ")\n";

@@ -359,6 +359,28 @@ class ShapeSlam {
   /// Every keyframe in order, at its corrected pose (e.g. to build an occupancy grid).
   std::vector<KeyframeView> Keyframes() const;
 
+  /// What a finished run leaves for its outputs, without the mapper's working state (submaps,
+  /// the keyframes' shapes, the pose graph, the loop search): the map, the keyframes at their
+  /// corrected poses, the loop events and the odometry report.
+  struct Result {
+    /// A keyframe: its scan (beams counter-clockwise) and corrected robot pose.
+    struct Keyframe {
+      LaserScan scan;
+      Pose2 T_map_robot;
+    };
+    PolylineMap map;                    ///< Map()
+    std::vector<Keyframe> keyframes;    ///< as Keyframes(), the scans owned
+    std::vector<LoopEvent> loop_events; ///< LoopEvents()
+    OdometryReport odometry;            ///< Odometry()
+    /// Views of `keyframes` as Keyframes() gives them, valid while `keyframes` is unchanged.
+    std::vector<KeyframeView> KeyframeViews() const;
+  };
+  /// Hands the result over (after Finish, and after reading anything else wanted, such as
+  /// Trajectory()) and frees the rest at once: the outputs of a long log then need not share
+  /// the memory with the mapping state. The mapper is left moved-from: destroy it, use it no
+  /// more.
+  Result TakeResult() &&;
+
  private:
   struct Prediction {
     Pose2 T_map_robot;

@@ -717,6 +717,36 @@ void ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   if (loop_closer_.Update(places_, graph_) || anchor_moved) Optimize();
 }
 
+std::vector<ShapeSlam::KeyframeView> ShapeSlam::Result::KeyframeViews() const {
+  std::vector<KeyframeView> views;
+  views.reserve(keyframes.size());
+  for (const Keyframe& k : keyframes) views.push_back({&k.scan, k.T_map_robot});
+  return views;
+}
+
+ShapeSlam::Result ShapeSlam::TakeResult() && {
+  Map();  // made (if not yet) while the shapes it is made of are here
+  Result result;
+  result.map = std::move(map_);
+  result.keyframes.reserve(keyframes_.size());
+  for (std::size_t k = 0; k < keyframes_.size(); ++k) {
+    result.keyframes.push_back({std::move(keyframes_[k].scan), graph_.Node(places_[k].node)});
+  }
+  result.loop_events = loop_closer_.Events();
+  result.odometry = odometry_;
+  // Freed now rather than when the mapper goes: the caller may still hold it.
+  std::vector<Keyframe>().swap(keyframes_);
+  std::vector<LoopKeyframe>().swap(places_);
+  std::vector<Submap>().swap(active_submaps_);
+  std::vector<Submap>().swap(finished_submaps_);
+  loop_closer_ = LoopCloser(params_.loop_closure, ToScanMatchParams(params_));
+  graph_ = PoseGraph();
+  initial_map_ = PolylineMap();
+  map_ = PolylineMap();
+  map_made_from_ = {-1, -1};
+  return result;
+}
+
 std::vector<ShapeSlam::KeyframeView> ShapeSlam::Keyframes() const {
   std::vector<KeyframeView> views;
   views.reserve(keyframes_.size());
