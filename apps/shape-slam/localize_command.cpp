@@ -16,6 +16,7 @@
 #include "progress.h"
 #include "shape_slam/localizer.h"
 #include "shape_slam_io/atomic_file.h"
+#include "shape_slam_io/drawing.h"
 #include "shape_slam_io/json_writer.h"
 #include "shape_slam_io/map_file.h"
 #include "shape_slam_io/params_ini.h"
@@ -42,8 +43,11 @@ ArgParser MakeParser() {
       .Flag("--quiet", "no progress bar and no summary")
       .Flag("--strict", "fail on the first malformed log record instead of skipping it")
       .Epilog(
-          "Outputs (written atomically into DIR, only after a successful run):\n"
+          "Outputs (written atomically into DIR, all together, only after a successful run):\n"
           "  trajectory.tum   one line per localized scan: timestamp x y z qx qy qz qw\n"
+          "  map.svg, map.png the map with the localized trajectory (blue, apart where\n"
+          "                   the robot was not localized; start green, end red) and\n"
+          "                   where it was lost (orange)\n"
           "  stats.json       scans, localized fraction, first localized scan, lost and\n"
           "                   recovered events, per-scan times, status counts\n"
           "  status.csv       one row per scan: scan, timestamp, status (searching,\n"
@@ -58,6 +62,8 @@ ArgParser MakeParser() {
 
 struct LocalizeOutput {
   std::vector<StampedPose> trajectory;  // localized scans only
+  std::vector<Polyline> pieces;         // the localized stretches' positions (for the picture)
+  std::vector<Point2> lost_at;          // the last pose before each loss
   std::string status_csv;               // one row per scan
   std::vector<double> scan_ms;
   std::size_t scans = 0, localized = 0, matched = 0;
@@ -93,6 +99,7 @@ LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& 
   out.status_csv = kStatusHeader;
   ProgressBar progress(scans.size(), "localizing", !quiet);
   const auto start = std::chrono::steady_clock::now();
+  bool localized_before = false;
   for (std::size_t i = 0; i < scans.size(); ++i) {
     const auto t0 = std::chrono::steady_clock::now();
     const LocalizerReport report = localizer.Process(scans[i]);
@@ -101,12 +108,16 @@ LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& 
     out.status_csv += StatusRow(i, report, out.scan_ms.back());
     ++out.status_counts[static_cast<int>(report.status)];
     if (report.localized) {
+      if (!localized_before || report.recovered_event) out.pieces.emplace_back();
+      out.pieces.back().push_back(report.T_map_robot.Translation());
       out.trajectory.push_back({report.timestamp_s, report.T_map_robot});
       ++out.localized;
       if (out.first_localized < 0) out.first_localized = static_cast<long long>(i);
     }
     out.matched += report.matched ? 1 : 0;
     out.lost_events += report.lost_event ? 1 : 0;
+    if (report.lost_event) out.lost_at.push_back(report.T_map_robot.Translation());
+    localized_before = report.localized;
     out.recovered_events += report.recovered_event ? 1 : 0;
     progress.Update(i + 1);
   }
@@ -195,18 +206,31 @@ int RunLocalize(const Args& args) {
   const LocalizeOutput out = RunLocalizer(localizer, scans, quiet);
   const double wall_s =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - wall_start).count();
-  io::WriteFileAtomically((std::filesystem::path(out_dir) / "trajectory.tum").string(),
-                          io::FormatTum(out.trajectory));
-  io::WriteFileAtomically((std::filesystem::path(out_dir) / "stats.json").string(),
-                          StatsJson(out, map_path, *reader, initial.has_value(), wall_s));
-  io::WriteFileAtomically((std::filesystem::path(out_dir) / "status.csv").string(), out.status_csv);
+  io::StagedFiles files;
+  const auto stage = [&](const char* name, const std::string& content) {
+    files.Stage((std::filesystem::path(out_dir) / name).string(), content);
+  };
+  stage("trajectory.tum", io::FormatTum(out.trajectory));
+  {
+    io::Drawing drawing = io::MakeMapDrawing(localizer.Map(), out.pieces,
+                                             std::filesystem::path(log).filename().string());
+    if (!out.lost_at.empty()) {
+      drawing.layers.push_back({"lost", {}, out.lost_at, {240, 140, 0}, 1.0, 4.0, false});
+    }
+    stage("map.svg", io::RenderSvg(drawing));
+    stage("map.png", io::RenderPng(drawing));
+  }
+  stage("status.csv", out.status_csv);
+  stage("stats.json", StatsJson(out, map_path, *reader, initial.has_value(), wall_s));
+  files.Commit();
   if (out.localized == 0) std::cerr << "warning: the robot was never localized in the map\n";
   if (!quiet) {
     std::cout << std::fixed << std::setprecision(2) << "localized " << out.localized << " of "
               << out.scans << " scans (" << 100.0 * LocalizedFraction(out) << " %), first at scan "
               << out.first_localized << ", lost " << out.lost_events << "x, recovered "
               << out.recovered_events << "x, median " << Percentile(out.scan_ms, 0.5)
-              << " ms/scan\noutputs in " << out_dir << "/ (trajectory.tum, stats.json, status.csv)\n";
+              << " ms/scan\noutputs in " << out_dir
+              << "/ (trajectory.tum, map.svg, map.png, status.csv, stats.json)\n";
   }
   return 0;
 }

@@ -55,4 +55,10 @@ namespace shape_slam::io {
 Drawing MakeMapDrawing(const PolylineMap& map, const std::vector<Point2>& trajectory,
                        const std::string& title);
 
+/// The same picture with the trajectory in pieces, each drawn on its own (not joined to the
+/// next: e.g. the stretches a localizer tracked, apart where it was not localized); the start
+/// is the first piece's first point, the end the last piece's last point.
+Drawing MakeMapDrawing(const PolylineMap& map, const std::vector<Polyline>& trajectory_pieces,
+                       const std::string& title);
+
 }  // namespace shape_slam::io

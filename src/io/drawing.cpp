@@ -336,17 +336,29 @@ namespace shape_slam::io {
 
 Drawing MakeMapDrawing(const PolylineMap& map, const std::vector<Point2>& trajectory,
                        const std::string& title) {
+  return MakeMapDrawing(map, std::vector<Polyline>{trajectory}, title);
+}
+
+Drawing MakeMapDrawing(const PolylineMap& map, const std::vector<Polyline>& trajectory_pieces,
+                       const std::string& title) {
   Drawing drawing;
   drawing.title = title;
   DrawingLayer walls{"map polylines", {}, {}, {20, 20, 20}, 1.6, 1.0, false};
   for (const PolylineId id : map.Ids()) walls.polylines.push_back(map.Get(id).points);
   DrawingLayer path{"trajectory", {}, {}, {40, 100, 220}, 1.0, 1.0, false};
-  if (trajectory.size() >= 2) path.polylines.push_back(trajectory);
+  const Point2* start = nullptr;
+  const Point2* end = nullptr;
+  for (const Polyline& piece : trajectory_pieces) {
+    if (piece.size() >= 2) path.polylines.push_back(piece);
+    if (piece.empty()) continue;
+    if (start == nullptr) start = &piece.front();
+    end = &piece.back();
+  }
   drawing.layers.push_back(std::move(path));
   drawing.layers.push_back(std::move(walls));
-  if (!trajectory.empty()) {
-    drawing.layers.push_back({"start", {}, {trajectory.front()}, {0, 160, 0}, 1.0, 4.0, false});
-    drawing.layers.push_back({"end", {}, {trajectory.back()}, {220, 0, 0}, 1.0, 4.0, false});
+  if (start != nullptr) {
+    drawing.layers.push_back({"start", {}, {*start}, {0, 160, 0}, 1.0, 4.0, false});
+    drawing.layers.push_back({"end", {}, {*end}, {220, 0, 0}, 1.0, 4.0, false});
   }
   return drawing;
 }

@@ -32,7 +32,7 @@ void CPolylineMap::getVisualizationInto(mrpt::opengl::CSetOfObjects& outObj) con
 // the file when it cannot be written.
 void CPolylineMap::saveMetricMapRepresentationToFile(const std::string& filNamePrefix) const {
   io::SaveMapFile(filNamePrefix + ".polylines", map_);
-  const io::Drawing drawing = io::MakeMapDrawing(map_, {}, "shape_slam::CPolylineMap");
+  const io::Drawing drawing = io::MakeMapDrawing(map_, std::vector<Point2>{}, "shape_slam::CPolylineMap");
   io::WriteFileAtomically(filNamePrefix + ".svg", io::RenderSvg(drawing));
 }
 

@@ -150,6 +150,10 @@ map_sum=$(cksum <"$WORK/moving/map.polylines")
 expect 0 "localized [0-9]+ of 3 scans" -- "$BIN" localize "$WORK/moving/map.polylines" "$LOG" \
   --out "$WORK/loc"
 [ "$(cksum <"$WORK/moving/map.polylines")" = "$map_sum" ] || fail "localize changed the map file"
+for f in trajectory.tum map.svg map.png status.csv stats.json; do
+  [ -s "$WORK/loc/$f" ] || fail "localize did not write $f"
+done
+grep -q "trajectory" "$WORK/loc/map.svg" || fail "localize: map.svg has no trajectory layer"
 python3 - "$WORK/loc/stats.json" "$WORK/loc/trajectory.tum" "$WORK/loc/status.csv" <<'PY' || fail "localize outputs not sane"
 import csv, json, sys
 d = json.load(open(sys.argv[1]))

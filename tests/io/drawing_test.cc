@@ -2,6 +2,8 @@
 // a viewer reads it) to the picture's size, and a line crossing every strip's edge stays whole.
 #include "shape_slam_io/drawing.h"
 
+#include "shape_slam/polyline_map.h"
+
 #include <gtest/gtest.h>
 
 #include <opencv2/core.hpp>
@@ -47,6 +49,33 @@ TEST(DrawingTest, ALineCrossingEveryStripStaysWhole) {
     EXPECT_GT(off[0] + off[1] + off[2], 3 * 200) << "row " << r;
   }
   EXPECT_EQ(dark_rows, image.rows - 40);
+}
+
+// A trajectory in pieces (localize: apart where the robot was not localized) is drawn piece by
+// piece, never joined across a gap; start and end are the first and last points drawn.
+TEST(DrawingTest, TrajectoryPiecesAreDrawnApart) {
+  PolylineMap map;
+  map.Add(MapPolyline{{Point2(0, 0), Point2(5, 0)}, {1.0, 1.0}});
+  const std::vector<Polyline> pieces = {{Point2(1, 1), Point2(2, 1)},
+                                        {},
+                                        {Point2(3, 1)},
+                                        {Point2(4, 2), Point2(4, 3), Point2(4.5, 3)}};
+  const Drawing drawing = MakeMapDrawing(map, pieces, "pieces");
+  const auto layer = [&](const std::string& name) -> const DrawingLayer& {
+    for (const DrawingLayer& l : drawing.layers) {
+      if (l.name == name) return l;
+    }
+    ADD_FAILURE() << "no layer " << name;
+    return drawing.layers.front();
+  };
+  ASSERT_EQ(layer("trajectory").polylines.size(), 2u);  // the one-point piece is no line
+  EXPECT_EQ(layer("trajectory").polylines[1], pieces[3]);
+  EXPECT_EQ(layer("start").points.at(0), Point2(1, 1));
+  EXPECT_EQ(layer("end").points.at(0), Point2(4.5, 3));
+  EXPECT_EQ(layer("map polylines").polylines.size(), 1u);
+  // One piece is the trajectory of `run`.
+  const Drawing whole = MakeMapDrawing(map, pieces[3], "whole");
+  EXPECT_EQ(whole.layers.front().polylines, std::vector<Polyline>{pieces[3]});
 }
 
 }  // namespace
