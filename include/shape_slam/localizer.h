@@ -123,6 +123,17 @@ struct LocalizerParams {
   /// be a look-alike place, whose tracking then fails within a few scans; a continued map built
   /// on it is wrong for good (aces two sessions, one copy of five: 16 m ATE).
   int first_pose_confirm_scans = 3;
+  /// The fast track's fit while tracking in the map, in place of the mapper's
+  /// (ShapeSlamParams::fast_track_min_fit, with odometry: the prediction refined alone is taken
+  /// when this fraction of the scan fits the map before and after; above 1: off). The same 0.95
+  /// by default. Lower trades a little accuracy for speed: at 0.85, in the own map with
+  /// odometry (3 noisy copies of each development log, idle machine), the tracking median fell
+  /// from 3.5-3.8 to 2.0-2.2 ms on aces and 2.5-2.8 to 2.1-2.2 ms on freiburg-079, the p95 from
+  /// 6.3-6.4 to 3.6-3.7 ms on infinite-corridor; the ATE against the reference stayed within 2
+  /// mm, but a few scans a log took a heading 2-6.6 deg off that shape matching would have
+  /// mended (intel: 3 scans of 910 more outside 0.10 m / 2 deg of the mapping run in each copy;
+  /// docs/notebook.md, 2026-12-06).
+  double fast_track_min_fit = 0.95;
 
   /// Throws std::invalid_argument naming the offending field.
   void Validate() const;
@@ -159,6 +170,7 @@ class Localizer {
   LocalizerReport Process(const LaserScan& scan);
 
   const PolylineMap& Map() const { return map_; }
+  /// The params as given, but stages.fast_track_min_fit is the localizer's (fast_track_min_fit).
   const LocalizerParams& Params() const { return params_; }
   /// The odometry's heading error learned from the tracked scans (stages.odometry_calibration,
   /// as the mapper learns it) and taken out of each increment before it predicts a scan.

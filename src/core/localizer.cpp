@@ -27,9 +27,13 @@ void AtLeastOne(int value, const std::string& name) {
   if (value < 1) throw std::invalid_argument(name + " must be >= 1");
 }
 
-const LocalizerParams& Validated(const LocalizerParams& params) {
+// The params validated, the localizer's fast track fit in its stages (LocalizerParams::
+// fast_track_min_fit).
+LocalizerParams Validated(const LocalizerParams& params) {
   params.Validate();
-  return params;
+  LocalizerParams own = params;
+  own.stages.fast_track_min_fit = params.fast_track_min_fit;
+  return own;
 }
 
 using internal::ValidateScan;  // shared with the mapper
@@ -114,6 +118,9 @@ void LocalizerParams::Validate() const {
     throw std::invalid_argument("LocalizerParams::first_pose_confirm_scans must be >= 0");
   }
   InRange(off_map_margin, 0.0, 1.0, "LocalizerParams::off_map_margin");
+  if (!(fast_track_min_fit >= 0.0)) {
+    throw std::invalid_argument("LocalizerParams::fast_track_min_fit must be >= 0");
+  }
 }
 
 const char* ToString(LocalizerStatus status) {

@@ -260,6 +260,7 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "off_map_search_every", "... every this many such scans, and its best pose replaces the tracked one ...", &p.off_map_search_every},
       {"localizer", "off_map_margin", "... when it is matched at min_global_fit, scores this much more in the global search's field and no rival comes near ...", &p.off_map_margin},
       {"localizer", "off_map_confirm_scans", "... and has stayed so for this many more scans, tracked beside the pose", &p.off_map_confirm_scans},
+      {"localizer", "fast_track_min_fit", "with odometry, take the refined prediction without shape matching when this fraction of the scan fits the map, in place of [pipeline] fast_track_min_fit (lower: faster, a few scans a log taken a few degrees off; above 1: off)", &p.fast_track_min_fit},
       {"localizer", "first_pose_confirm_scans", "run --map without --initial: the first localized pose counts once this many more scans matched after it, the tracking never lost (0: at once)", &p.first_pose_confirm_scans},
   };
 }

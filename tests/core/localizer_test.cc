@@ -395,6 +395,31 @@ TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
   params.min_inlier_ratio = 1.5;
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   EXPECT_THROW(Localizer{PolylineMap{}}, std::invalid_argument);
+  params = LocalizerParams();
+  params.fast_track_min_fit = -0.1;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+}
+
+// The fast track's fit in the map is the localizer's own, not the mapper's; the rest of the
+// stages are as given. With the fast track off the tracking holds as well.
+TEST(LocalizerTest, TheFastTrackFitIsTheLocalizersOwn) {
+  LocalizerParams params;
+  params.stages.fast_track_min_fit = 0.95;
+  params.fast_track_min_fit = 0.7;
+  const Localizer localizer(SceneMap(testing::LoopWorld()), params);
+  EXPECT_EQ(localizer.Params().stages.fast_track_min_fit, 0.7);
+  EXPECT_EQ(localizer.Params().stages.min_inlier_ratio, params.stages.min_inlier_ratio);
+  const SimRun run = Simulate(0, 40, 1);
+  for (const double fit : {0.85, 2.0}) {
+    params.fast_track_min_fit = fit;
+    Localizer tracked(SceneMap(testing::LoopWorld()), params);
+    tracked.SetInitialPose(run.truth[0]);
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = tracked.Process(run.scans[i]);
+      ASSERT_TRUE(report.localized) << "fit " << fit << ", scan " << i;
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05)) << "fit " << fit << ", scan " << i;
+    }
+  }
 }
 
 }  // namespace
