@@ -6,6 +6,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
+#include <string_view>
 #include <zlib.h>
 
 #include "shape_slam_io/atomic_file.h"
@@ -278,7 +279,7 @@ class PngEncoder {
   static void Put32(std::string& s, std::uint32_t v) {
     for (const int shift : {24, 16, 8, 0}) s += static_cast<char>((v >> shift) & 0xff);
   }
-  void Chunk(const char* type, const std::string& data) {
+  void Chunk(const char* type, std::string_view data) {
     Put32(out_, static_cast<std::uint32_t>(data.size()));
     const std::size_t start = out_.size();
     out_ += type;
@@ -298,7 +299,7 @@ class PngEncoder {
       status = deflate(&z_, flush);
       if (status == Z_STREAM_ERROR) throw OutputError("PNG encoding failed");
       const std::size_t produced = sizeof(buffer) - z_.avail_out;
-      if (produced > 0) Chunk("IDAT", std::string(buffer, produced));
+      if (produced > 0) Chunk("IDAT", std::string_view(buffer, produced));
     } while (z_.avail_out == 0 || (flush == Z_FINISH && status != Z_STREAM_END));
   }
 
