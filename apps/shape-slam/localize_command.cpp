@@ -63,7 +63,7 @@ ArgParser MakeParser() {
 struct LocalizeOutput {
   std::vector<StampedPose> trajectory;  // localized scans only
   std::vector<Polyline> pieces;         // the localized stretches' positions (for the picture)
-  std::vector<Point2> lost_at;          // the last pose before each loss
+  std::vector<Point2> lost_at;          // the pose of each scan that declared the robot lost
   std::string status_csv;               // one row per scan
   std::vector<double> scan_ms;
   std::size_t scans = 0, localized = 0, matched = 0;
