@@ -386,13 +386,6 @@ void ReturnFreedMemory() {
 #endif
 }
 
-// The map's polylines (a copy, to be let go of once the grid is made).
-std::vector<Polyline> Walls(const PolylineMap& map) {
-  std::vector<Polyline> walls;
-  for (const PolylineId id : map.Ids()) walls.push_back(map.Get(id).points);
-  return walls;
-}
-
 /// Which grid outputs to write, and their cell size.
 struct GridOutputs {
   bool ros = true;        // map.pgm + map.yaml
@@ -416,7 +409,7 @@ void StageGridOutputs(ShapeSlam::Result result, const GridOutputs& what, const S
   params.resolution_m = what.resolution_m;
   io::OccupancyGrid grid;
   {
-    const std::vector<Polyline> walls = Walls(result.map);
+    const std::vector<Polyline> walls = result.map.Polylines();  // let go of once the grid is made
     result.map = PolylineMap();  // its spatial index weighs more than its polylines
     ReturnFreedMemory();
     grid = io::BuildOccupancyGrid(walls, result.KeyframeViews(), params);

@@ -45,6 +45,8 @@ class PolylineMap {
   const MapPolyline& Get(PolylineId id) const;
   /// All ids in increasing order (deterministic iteration).
   std::vector<PolylineId> Ids() const;
+  /// Every polyline's points (a copy), in the order of Ids().
+  std::vector<Polyline> Polylines() const;
   /// Ids of polylines with a segment that may intersect the box, increasing.
   std::vector<PolylineId> IdsNear(const Point2& min, const Point2& max) const;
 

@@ -40,9 +40,7 @@ using internal::ValidateScan;  // shared with the mapper
 
 std::vector<Polyline> MapWalls(const PolylineMap& map) {
   if (map.Empty()) throw std::invalid_argument("Localizer: the map is empty");
-  std::vector<Polyline> walls;
-  for (const PolylineId id : map.Ids()) walls.push_back(map.Get(id).points);
-  return walls;
+  return map.Polylines();
 }
 
 // Window centres on a grid covering the map's bounding box, 2 * tile_half_m apart.

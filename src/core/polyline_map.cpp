@@ -90,6 +90,13 @@ std::vector<PolylineId> PolylineMap::Ids() const {
   return ids;
 }
 
+std::vector<Polyline> PolylineMap::Polylines() const {
+  std::vector<Polyline> polylines;
+  polylines.reserve(polylines_.size());
+  for (const PolylineId id : Ids()) polylines.push_back(polylines_.at(id).points);
+  return polylines;
+}
+
 std::vector<PolylineId> PolylineMap::IdsNear(const Point2& min, const Point2& max) const {
   std::vector<PolylineId> ids;
   for (const SegmentRef& ref : index_.QueryBox(min, max)) {

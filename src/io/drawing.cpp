@@ -344,8 +344,7 @@ Drawing MakeMapDrawing(const PolylineMap& map, const std::vector<Polyline>& traj
                        const std::string& title) {
   Drawing drawing;
   drawing.title = title;
-  DrawingLayer walls{"map polylines", {}, {}, {20, 20, 20}, 1.6, 1.0, false};
-  for (const PolylineId id : map.Ids()) walls.polylines.push_back(map.Get(id).points);
+  DrawingLayer walls{"map polylines", map.Polylines(), {}, {20, 20, 20}, 1.6, 1.0, false};
   DrawingLayer path{"trajectory", {}, {}, {40, 100, 220}, 1.0, 1.0, false};
   const Point2* start = nullptr;
   const Point2* end = nullptr;

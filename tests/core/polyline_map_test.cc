@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <stdexcept>
+#include <vector>
 
 namespace shape_slam {
 namespace {
@@ -29,6 +30,22 @@ TEST(PolylineMapTest, IdsAreNeverReusedAndCountsFollowTheContent) {
   MapPolyline broken = Wall({0.0, 0.0}, {1.0, 0.0});
   broken.support.pop_back();
   EXPECT_THROW(map.Add(broken), std::invalid_argument);
+}
+
+// Polylines() is every polyline's points in the order of Ids(), whatever the order of adding.
+TEST(PolylineMapTest, PolylinesFollowTheIds) {
+  PolylineMap map;
+  const PolylineId a = map.Add(Wall({0.0, 0.0}, {1.0, 0.0}));
+  map.Add(Wall({0.0, 1.0}, {1.0, 1.0}));
+  const PolylineId c = map.Add(Wall({2.0, 0.0}, {3.0, 0.0}));
+  map.Remove(a);
+  map.Replace(c, Wall({5.0, 0.0}, {6.0, 0.0}));
+  const std::vector<Polyline> polylines = map.Polylines();
+  const std::vector<PolylineId> ids = map.Ids();
+  ASSERT_EQ(polylines.size(), ids.size());
+  for (std::size_t i = 0; i < ids.size(); ++i) EXPECT_EQ(polylines[i], map.Get(ids[i]).points);
+  EXPECT_EQ(polylines.back().front(), Point2(5.0, 0.0));
+  EXPECT_TRUE(PolylineMap().Polylines().empty());
 }
 
 TEST(PolylineMapTest, RestoredSnapshotIsTheMapItWasTakenFrom) {
