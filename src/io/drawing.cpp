@@ -9,6 +9,7 @@
 #include <string_view>
 #include <zlib.h>
 
+#include "deflate_internal.h"
 #include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/json_writer.h"
 
@@ -288,19 +289,9 @@ class PngEncoder {
     Put32(out_, static_cast<std::uint32_t>(crc32(0L, bytes, static_cast<uInt>(out_.size() - start))));
   }
   // Compresses `in` into IDAT chunks of up to 64 KiB; Z_FINISH flushes the stream.
-  void Deflate(const std::string& in, int flush) {
-    z_.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(in.data()));
-    z_.avail_in = static_cast<uInt>(in.size());
-    int status = Z_OK;
-    do {
-      char buffer[1 << 16];
-      z_.next_out = reinterpret_cast<Bytef*>(buffer);
-      z_.avail_out = sizeof(buffer);
-      status = deflate(&z_, flush);
-      if (status == Z_STREAM_ERROR) throw OutputError("PNG encoding failed");
-      const std::size_t produced = sizeof(buffer) - z_.avail_out;
-      if (produced > 0) Chunk("IDAT", std::string_view(buffer, produced));
-    } while (z_.avail_out == 0 || (flush == Z_FINISH && status != Z_STREAM_END));
+  void Deflate(std::string_view in, int flush) {
+    internal::DeflateInto(z_, in, flush, "PNG encoding failed",
+                          [&](std::string_view block) { Chunk("IDAT", block); });
   }
 
   int width_;

@@ -13,6 +13,7 @@
 #include <string>
 #include <utility>
 
+#include "deflate_internal.h"
 #include "mrpt_scan_internal.h"
 #include "shape_slam_io/atomic_file.h"
 #include "shape_slam_io/ros_map.h"
@@ -35,9 +36,7 @@ class GzipStringStream : public mrpt::io::CStream {
 
   size_t Read(void*, size_t) override { throw OutputError("gzip stream: not readable"); }
   size_t Write(const void* buffer, size_t count) override {
-    z_.next_in = static_cast<Bytef*>(const_cast<void*>(buffer));
-    z_.avail_in = static_cast<uInt>(count);
-    Deflate(Z_NO_FLUSH);
+    Deflate(std::string_view(static_cast<const char*>(buffer), count), Z_NO_FLUSH);
     written_ += count;
     return count;
   }
@@ -47,23 +46,14 @@ class GzipStringStream : public mrpt::io::CStream {
 
   /// Ends the compressed stream and returns it.
   std::string Finish() {
-    z_.next_in = nullptr;
-    z_.avail_in = 0;
-    Deflate(Z_FINISH);
+    Deflate({}, Z_FINISH);
     return std::move(out_);
   }
 
  private:
-  void Deflate(int flush) {
-    unsigned char chunk[1 << 16];
-    int rc = Z_OK;
-    do {
-      z_.next_out = chunk;
-      z_.avail_out = sizeof(chunk);
-      rc = deflate(&z_, flush);
-      if (rc == Z_STREAM_ERROR) throw OutputError("gzip compression failed");
-      out_.append(reinterpret_cast<const char*>(chunk), sizeof(chunk) - z_.avail_out);
-    } while (z_.avail_out == 0 || (flush == Z_FINISH && rc != Z_STREAM_END));
+  void Deflate(std::string_view in, int flush) {
+    internal::DeflateInto(z_, in, flush, "gzip compression failed",
+                          [&](std::string_view block) { out_.append(block); });
   }
 
   z_stream z_{};
