@@ -82,6 +82,10 @@ class WindowSearch {
   /// frame), best first; empty when there are no samples or no model.
   std::vector<WindowHypothesis> Search(const std::vector<Point2>& samples_scan,
                                        const Pose2& T_model_scan_centre) const;
+  /// The same in another window: +-half_window_m, +-half_window_rad.
+  std::vector<WindowHypothesis> Search(const std::vector<Point2>& samples_scan,
+                                       const Pose2& T_model_scan_centre, double half_window_m,
+                                       double half_window_rad) const;
 
   /// The best distinct poses over the whole model, every translation and all turns, best
   /// first: one branch and bound over the field built at construction (its top level is the

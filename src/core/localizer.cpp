@@ -116,6 +116,10 @@ void LocalizerParams::Validate() const {
     throw std::invalid_argument("LocalizerParams::first_pose_confirm_scans must be >= 0");
   }
   InRange(off_map_margin, 0.0, 1.0, "LocalizerParams::off_map_margin");
+  if (recheck_every < 0) throw std::invalid_argument("LocalizerParams::recheck_every must be >= 0");
+  InRange(recheck_half_window_m, 0.0, 100.0, "LocalizerParams::recheck_half_window_m");
+  InRange(recheck_half_window_rad, 0.0, M_PI, "LocalizerParams::recheck_half_window_rad");
+  InRange(recheck_margin, 0.0, 1.0, "LocalizerParams::recheck_margin");
   if (!(fast_track_min_fit >= 0.0)) {
     throw std::invalid_argument("LocalizerParams::fast_track_min_fit must be >= 0");
   }
@@ -385,6 +389,11 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
     report.lost_event = true;
     return report;
   }
+  if (v.trusted && !dropped && Recheck(shapes, scan, v)) {
+    report.T_map_robot = v.T_map_robot;
+    report.inlier_ratio = v.fit;
+    report.rechecked = true;
+  }
   if (params_.off_map_fit > 0.0 && RelocalizeOffMap(shapes, scan, odometry_delta, v)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
@@ -394,6 +403,35 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   report.status = LocalizerStatus::kTracking;
   report.localized = true;
   return report;
+}
+
+// The map's check of the tracked pose (LocalizerParams::recheck_*): every recheck_every matched
+// scans, the best pose of the map's likelihood field near the tracked one, verified by the
+// registration and better by recheck_margin there before and after, replaces it (`v`; true).
+bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan, Verified& v) {
+  if (params_.recheck_every <= 0 || challenger_ || ++recheck_scans_ < params_.recheck_every) {
+    return false;
+  }
+  recheck_scans_ = 0;
+  const std::vector<Point2> samples = GlobalSamples(shapes);
+  const double tracked_fit = global_search_.Fit(samples, v.T_map_robot * scan.T_robot_sensor);
+  const std::vector<WindowHypothesis> found =
+      global_search_.Search(samples, v.T_map_robot * scan.T_robot_sensor,
+                            params_.recheck_half_window_m, params_.recheck_half_window_rad);
+  if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return false;
+  const Hypothesis probe(found.front().T_model_scan * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
+                         params_.stages.motion_model);
+  const Verified c = Track(shapes, scan, probe, Pose2(), 0, params_.min_global_fit, TrackingAids{});
+  if (!c.trusted || global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor) <
+                        tracked_fit + params_.recheck_margin) {
+    return false;
+  }
+  Hypothesis& h = hypotheses_.front();
+  h.T_map_robot = c.T_map_robot;
+  h.fit = c.fit;
+  recent_.reset();
+  v = c;
+  return true;
 }
 
 // Off the map (LocalizerParams::off_map_fit): while the map explains the tracked pose poorly,

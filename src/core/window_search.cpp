@@ -310,10 +310,17 @@ WindowHypothesis WindowSearch::Scorer::Leaf(const Node& node) const {
 
 std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& samples_scan,
                                                    const Pose2& T_model_scan_centre) const {
+  return Search(samples_scan, T_model_scan_centre, params_.half_window_m, params_.half_window_rad);
+}
+
+std::vector<WindowHypothesis> WindowSearch::Search(const std::vector<Point2>& samples_scan,
+                                                   const Pose2& T_model_scan_centre,
+                                                   double half_window_m,
+                                                   double half_window_rad) const {
   if (samples_scan.empty() || pyramid_.empty()) return {};
-  const int c = static_cast<int>(std::ceil(params_.half_window_m / resolution_m_));
+  const int c = static_cast<int>(std::ceil(half_window_m / resolution_m_));
   const Scorer scorer(*this, samples_scan, T_model_scan_centre, {-c, c, -c, c},
-                      params_.half_window_rad);
+                      half_window_rad);
   std::vector<WindowHypothesis> found;
   std::priority_queue<Node> queue = scorer.TopNodes();
   while (!queue.empty() && scorer.evaluations < params_.max_node_evaluations) {

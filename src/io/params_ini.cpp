@@ -260,6 +260,10 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "off_map_search_every", "... every this many such scans, and its best pose replaces the tracked one ...", &p.off_map_search_every},
       {"localizer", "off_map_margin", "... when it is matched at min_global_fit, scores this much more in the global search's field and no rival comes near ...", &p.off_map_margin},
       {"localizer", "off_map_confirm_scans", "... and has stayed so for this many more scans, tracked beside the pose", &p.off_map_confirm_scans},
+      {"localizer", "recheck_every", "while tracking, every this many matched scans the map alone checks the tracked pose: the best pose of the global search's likelihood field nearby ... (0: off)", &p.recheck_every},
+      {"localizer", "recheck_half_window_m", "... within this (m) ...", &p.recheck_half_window_m},
+      {"localizer", "recheck_half_window_rad", "... and this (rad) of the tracked pose ...", &p.recheck_half_window_rad},
+      {"localizer", "recheck_margin", "... replaces it when it scores this much more in that field, before and after the registration verified it", &p.recheck_margin},
       {"localizer", "fast_track_min_fit", "with odometry, take the refined prediction without shape matching when this fraction of the scan fits the map, in place of [pipeline] fast_track_min_fit (lower: faster, a few scans a log taken a few degrees off; above 1: off)", &p.fast_track_min_fit},
       {"localizer", "first_pose_confirm_scans", "run --map without --initial: the first localized pose counts once this many more scans matched after it, the tracking never lost (0: at once)", &p.first_pose_confirm_scans},
   };

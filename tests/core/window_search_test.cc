@@ -172,6 +172,28 @@ TEST(WindowSearchTest, RecoversKnownPosesFromTheCentre) {
   EXPECT_GE(recovered, kTrials - 1);
 }
 
+// A window given to Search replaces the params' own: the known pose is found from a centre
+// 0.3 m and 0.1 rad off within a 0.6 m / 0.3 rad window, and a window too small to reach it
+// returns only poses inside it.
+TEST(WindowSearchTest, AGivenWindowBoundsTheSearch) {
+  std::mt19937 prng(7);
+  const Scene scene = OfficeRoom();
+  const WindowSearch search(SceneModel(scene));
+  const Pose2 truth(3.0, 2.5, 0.4);
+  const std::vector<Point2> samples = ScanSamples(scene, truth, prng);
+  const Pose2 centre = truth * Pose2(0.3, -0.2, 0.1);
+  const std::vector<WindowHypothesis> wide = search.Search(samples, centre, 0.6, 0.3);
+  ASSERT_FALSE(wide.empty());
+  EXPECT_THAT(wide.front().T_model_scan, IsNearly(truth, 0.2, 0.05));
+  const std::vector<WindowHypothesis> narrow = search.Search(samples, centre, 0.1, 0.02);
+  ASSERT_FALSE(narrow.empty());
+  for (const WindowHypothesis& h : narrow) {
+    EXPECT_LE(std::abs(h.T_model_scan.x - centre.x), 0.1 + search.ResolutionM());
+    EXPECT_LE(std::abs(h.T_model_scan.y - centre.y), 0.1 + search.ResolutionM());
+    EXPECT_LE(std::abs(NormalizeAngle(h.T_model_scan.theta - centre.theta)), 0.02 + 0.05);
+  }
+}
+
 // A featureless corridor fits anywhere along its axis: the prior takes the pose nearest the
 // centre.
 TEST(WindowSearchTest, PriorDecidesAlongAFeaturelessCorridor) {
