@@ -414,10 +414,10 @@ bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan, Verifie
   }
   recheck_scans_ = 0;
   const std::vector<Point2> samples = GlobalSamples(shapes);
-  const double tracked_fit = global_search_.Fit(samples, v.T_map_robot * scan.T_robot_sensor);
-  const std::vector<WindowHypothesis> found =
-      global_search_.Search(samples, v.T_map_robot * scan.T_robot_sensor,
-                            params_.recheck_half_window_m, params_.recheck_half_window_rad);
+  const Pose2 T_map_sensor = v.T_map_robot * scan.T_robot_sensor;
+  const double tracked_fit = global_search_.Fit(samples, T_map_sensor);
+  const std::vector<WindowHypothesis> found = global_search_.Search(
+      samples, T_map_sensor, params_.recheck_half_window_m, params_.recheck_half_window_rad);
   if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return false;
   const Hypothesis probe(found.front().T_model_scan * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
                          params_.stages.motion_model);
