@@ -409,8 +409,6 @@ TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
   EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
 
-// The fast track's fit in the map is the localizer's own, not the mapper's; the rest of the
-// stages are as given. With the fast track off the tracking holds as well.
 // The map's check (recheck_*) at every scan leaves a right tracking right: around the block
 // with odometry and without, every pose stays within 0.1 m and 0.05 rad of the truth. (What it
 // mends, a pose the tracking and its recent scan hold a few degrees off, comes from real logs:
@@ -426,6 +424,8 @@ TEST(LocalizerTest, TheMapsCheckLeavesARightPoseRight) {
   }
 }
 
+// The fast track's fit in the map is the localizer's own, not the mapper's; the rest of the
+// stages are as given. With the fast track off the tracking holds as well.
 TEST(LocalizerTest, TheFastTrackFitIsTheLocalizersOwn) {
   LocalizerParams params;
   params.stages.fast_track_min_fit = 0.95;

@@ -173,8 +173,9 @@ TEST(WindowSearchTest, RecoversKnownPosesFromTheCentre) {
 }
 
 // A window given to Search replaces the params' own: the known pose is found from a centre
-// 0.3 m and 0.1 rad off within a 0.6 m / 0.3 rad window, and a window too small to reach it
-// returns only poses inside it.
+// 0.36 m and 0.1 rad off within a 0.6 m / 0.3 rad window, and a window too small to reach it
+// returns only poses inside it (up to a cell, and an angular step: the cell over the samples'
+// range, under 0.05 rad in this room).
 TEST(WindowSearchTest, AGivenWindowBoundsTheSearch) {
   std::mt19937 prng(7);
   const Scene scene = OfficeRoom();
