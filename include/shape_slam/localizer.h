@@ -224,7 +224,8 @@ class Localizer {
     Pose2 correction;        // of the prediction (sensor frame), and its covariance
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   };
-  bool Recheck(const ScanShapes& shapes, const LaserScan& scan, Verified& v);
+  bool Recheck(const ScanShapes& shapes, const LaserScan& scan,
+               const std::vector<Point2>& samples, Verified& v);
   // What only the tracked pose gets (TrackPose): its recent scan, the visible map without what
   // the scan saw through (with odometry), and the retry's wider occlusion tolerance.
   struct TrackingAids {
@@ -237,6 +238,8 @@ class Localizer {
                  const TrackingAids& aids) const;
   void KeepRecent(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot);
   double TrackingMinFit() const;
+  Verified Verify(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_sensor,
+                  double min_fit) const;
   std::vector<Verified> VerifiedGlobalPoses(const ScanShapes& shapes, const LaserScan& scan,
                                             const std::vector<Point2>& samples,
                                             double min_fit) const;
@@ -253,6 +256,7 @@ class Localizer {
                      const Verified& v);
   std::vector<Point2> GlobalSamples(const ScanShapes& shapes) const;
   bool RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
+                        const std::vector<Point2>& samples,
                         const std::optional<Pose2>& odometry_delta, Verified& v);
   std::optional<Verified> SearchOffMap(const ScanShapes& shapes, const LaserScan& scan,
                                        const std::vector<Point2>& samples,

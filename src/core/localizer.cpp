@@ -239,9 +239,18 @@ std::vector<Point2> Localizer::GlobalSamples(const ScanShapes& shapes) const {
                            p.window_search_spacing_m);
 }
 
+// A pose of the global search's field (sensor frame) verified by the localization with it as a
+// tight prediction, matched at min_fit or not.
+Localizer::Verified Localizer::Verify(const ScanShapes& shapes, const LaserScan& scan,
+                                      const Pose2& T_map_sensor, double min_fit) const {
+  const Hypothesis probe(T_map_sensor * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
+                         params_.stages.motion_model);
+  return Track(shapes, scan, probe, Pose2(), 0, min_fit, TrackingAids{});
+}
+
 // The branch and bound over the whole map (all turns) for `samples` (GlobalSamples): its best
-// distinct robot poses, best fit first, each verified by the localization with it as a tight
-// prediction; the ones matched at min_fit, in that order. Its params (GlobalSearchParams) have
+// distinct robot poses, best fit first, each verified (Verify); the ones matched at min_fit, in
+// that order. Its params (GlobalSearchParams) have
 // no motion prior, so score is fit, and the localizer's distinct_m, distinct_rad and
 // global_hypotheses, so the poses are already the distinct few to verify.
 std::vector<Localizer::Verified> Localizer::VerifiedGlobalPoses(const ScanShapes& shapes,
@@ -250,9 +259,7 @@ std::vector<Localizer::Verified> Localizer::VerifiedGlobalPoses(const ScanShapes
                                                                 double min_fit) const {
   std::vector<Verified> verified;
   for (const WindowHypothesis& h : global_search_.SearchMap(samples)) {
-    const Hypothesis probe(h.T_model_scan * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
-                           params_.stages.motion_model);
-    const Verified v = Track(shapes, scan, probe, Pose2(), 0, min_fit, TrackingAids{});
+    const Verified v = Verify(shapes, scan, h.T_model_scan, min_fit);
     if (v.trusted) verified.push_back(v);
   }
   return verified;
@@ -389,12 +396,16 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
     report.lost_event = true;
     return report;
   }
-  if (v.trusted && !dropped && Recheck(shapes, scan, v)) {
+  // The map-only checks below score the same samples (GlobalSamples).
+  const std::vector<Point2> samples = params_.recheck_every > 0 || params_.off_map_fit > 0.0
+                                          ? GlobalSamples(shapes)
+                                          : std::vector<Point2>();
+  if (v.trusted && !dropped && Recheck(shapes, scan, samples, v)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
     report.rechecked = true;
   }
-  if (params_.off_map_fit > 0.0 && RelocalizeOffMap(shapes, scan, odometry_delta, v)) {
+  if (params_.off_map_fit > 0.0 && RelocalizeOffMap(shapes, scan, samples, odometry_delta, v)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
     report.matched = report.recovered_event = true;
@@ -407,21 +418,20 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
 
 // The map's check of the tracked pose (LocalizerParams::recheck_*): every recheck_every matched
 // scans, the best pose of the map's likelihood field near the tracked one, verified by the
-// registration and better by recheck_margin there before and after, replaces it (`v`; true).
-bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan, Verified& v) {
+// registration (Verify) and better by recheck_margin there before and after, replaces it (`v`;
+// true). `samples`: the scan's (GlobalSamples), shared with RelocalizeOffMap.
+bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan,
+                        const std::vector<Point2>& samples, Verified& v) {
   if (params_.recheck_every <= 0 || challenger_ || ++recheck_scans_ < params_.recheck_every) {
     return false;
   }
   recheck_scans_ = 0;
-  const std::vector<Point2> samples = GlobalSamples(shapes);
   const Pose2 T_map_sensor = v.T_map_robot * scan.T_robot_sensor;
   const double tracked_fit = global_search_.Fit(samples, T_map_sensor);
   const std::vector<WindowHypothesis> found = global_search_.Search(
       samples, T_map_sensor, params_.recheck_half_window_m, params_.recheck_half_window_rad);
   if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return false;
-  const Hypothesis probe(found.front().T_model_scan * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
-                         params_.stages.motion_model);
-  const Verified c = Track(shapes, scan, probe, Pose2(), 0, params_.min_global_fit, TrackingAids{});
+  const Verified c = Verify(shapes, scan, found.front().T_model_scan, params_.min_global_fit);
   if (!c.trusted || global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor) <
                         tracked_fit + params_.recheck_margin) {
     return false;
@@ -440,8 +450,8 @@ bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan, Verifie
 // stayed matched and that much better for off_map_confirm_scans scans it replaces the tracked
 // pose (`v`; true). A look-alike corridor fits one scan; rarely the next few as well.
 bool Localizer::RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
+                                 const std::vector<Point2>& samples,
                                  const std::optional<Pose2>& odometry_delta, Verified& v) {
-  const std::vector<Point2> samples = GlobalSamples(shapes);
   const auto map_fit = [&](const Pose2& T_map_robot) {
     return global_search_.Fit(samples, T_map_robot * scan.T_robot_sensor);
   };
