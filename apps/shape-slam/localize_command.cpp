@@ -54,7 +54,8 @@ ArgParser MakeParser() {
           "                   ambiguous, tracking, lost), localized, matched, x y theta (the\n"
           "                   pose or best hypothesis; empty without one), inlier_ratio,\n"
           "                   hypotheses, lost_event, recovered_event, rechecked (the\n"
-          "                   map's check moved the pose), ms\n\n"
+          "                   map's check moved the pose), field_tracked (without\n"
+          "                   odometry, the map's field predicted the scan), ms\n\n"
           "Example:\n"
           "  shape-slam run intel.log.gz --out intel-out\n"
           "  shape-slam localize intel-out/map.polylines intel.log.gz --out intel-loc");
@@ -69,7 +70,7 @@ struct LocalizeOutput {
   std::vector<double> scan_ms;
   std::size_t scans = 0, localized = 0, matched = 0;
   long long first_localized = -1;
-  int lost_events = 0, recovered_events = 0, rechecks = 0;
+  int lost_events = 0, recovered_events = 0, rechecks = 0, field_tracked = 0;
   std::size_t status_counts[4] = {0, 0, 0, 0};
   double processing_s = 0.0;
   double heading_per_m = 0.0, heading_per_rad = 0.0;  // learned (OdometryCalibrator)
@@ -77,7 +78,7 @@ struct LocalizeOutput {
 
 constexpr const char* kStatusHeader =
     "scan,timestamp,status,localized,matched,x,y,theta,inlier_ratio,hypotheses,lost_event,"
-    "recovered_event,rechecked,ms\n";
+    "recovered_event,rechecked,field_tracked,ms\n";
 
 // One status.csv row. Without a pose or hypothesis (searching with none yet) x, y, theta are
 // empty.
@@ -91,7 +92,8 @@ std::string StatusRow(std::size_t scan, const LocalizerReport& r, double ms) {
     row << ",,";
   }
   row << ',' << std::setprecision(4) << r.inlier_ratio << ',' << r.hypotheses << ','
-      << r.lost_event << ',' << r.recovered_event << ',' << r.rechecked << ',' << ms << '\n';
+      << r.lost_event << ',' << r.recovered_event << ',' << r.rechecked << ','
+      << r.field_tracked << ',' << ms << '\n';
   return row.str();
 }
 
@@ -121,6 +123,7 @@ LocalizeOutput RunLocalizer(Localizer& localizer, const std::vector<LaserScan>& 
     localized_before = report.localized;
     out.recovered_events += report.recovered_event ? 1 : 0;
     out.rechecks += report.rechecked ? 1 : 0;
+    out.field_tracked += report.field_tracked ? 1 : 0;
     progress.Update(i + 1);
   }
   progress.Finish();
@@ -152,6 +155,7 @@ std::string StatsJson(const LocalizeOutput& out, const std::string& map_path,
   json.Key("first_localized_scan").Value(out.first_localized);
   json.Key("lost_events").Value(out.lost_events).Key("recovered_events").Value(out.recovered_events);
   json.Key("rechecks").Value(out.rechecks);
+  json.Key("field_tracked").Value(out.field_tracked);
   json.Key("status_counts").BeginObject();
   for (int s = 0; s < 4; ++s) {
     json.Key(ToString(static_cast<LocalizerStatus>(s))).Value(out.status_counts[s]);

@@ -135,6 +135,33 @@ struct LocalizerParams {
   double recheck_half_window_m = 0.6;     ///< metres
   double recheck_half_window_rad = 0.26;  ///< radians
   double recheck_margin = 0.05;           ///< mean likelihood of the scan's samples, 0-1
+  /// The field track (not in the paper), without odometry: the map's likelihood field (the global
+  /// search's, built once at load) predicts the scan as odometry would. The field's best pose
+  /// within field_track_half_window_m (rounded up to whole cells of the field: 0.4 m at
+  /// global_resolution_m) and field_track_half_window_rad of the constant-velocity prediction is
+  /// the prediction, unless the field scores the constant velocity's own pose within
+  /// field_track_tie of it (along a corridor the field is flat and the motion decides); the
+  /// registration then refines it as with odometry (the fast track, else shape matching near it)
+  /// against the map and the recent scan, with a prior of field_track_prior_sigma_m. It is taken
+  /// when it fits field_track_min_fit, else the scan is matched without a prediction as before (0:
+  /// off); see field_track_check_ratio. While lost or ambiguous, each hypothesis that matched the
+  /// scan before is field-tracked first as well. Shape matching without a prediction is what the
+  /// tracking without odometry spent its time on; the field is a prediction the recent scan cannot
+  /// pull aside. In bench/localize (own map without odometry, 3 noisy copies of each development
+  /// log) the tracking median fell from 6.6-19 to 2.4-4.9 ms and the scans within 0.10 m / 2 deg of
+  /// the mapping run rose on aces, freiburg-079 and infinite-corridor (intel 98.4 -> 98.2 %); the
+  /// other half's near-map score fell on freiburg-079 and infinite-corridor
+  /// (bench/results/localize/README.md, docs/notebook.md 2026-12-06).
+  double field_track_min_fit = 0.8;
+  double field_track_half_window_m = 0.3;    ///< metres
+  double field_track_half_window_rad = 0.1;  ///< radians
+  double field_track_tie = 0.03;             ///< mean likelihood of the scan's samples, 0-1
+  double field_track_prior_sigma_m = 0.15;   ///< metres (the rotation's: odometry_noise's floor)
+  /// When the field track's fit falls below field_track_check_ratio times the running mean of
+  /// the fit, the scan is matched without a prediction as well and the better fit wins (0:
+  /// never). A robot that starts to drive after a turn on the spot is beyond the window, and a
+  /// pose inside it can still fit 0.87 (intel, scan 108 of each copy: 2.2 m off for 11 scans).
+  double field_track_check_ratio = 0.9;
   /// Where a log starts in a map (LocalizeFirstScan, run --map without --initial): the first
   /// localized pose counts once this many more scans have been matched after it with the
   /// tracking never lost in between (0: at once). A pose found by the global search alone can
@@ -174,6 +201,9 @@ struct LocalizerReport {
   bool lost_event = false;     ///< tracking was lost at this scan
   bool recovered_event = false;  ///< the pose was found again after a loss at this scan
   bool rechecked = false;  ///< the map's check moved the tracked pose (LocalizerParams::recheck_*)
+  /// Without odometry, the map's likelihood field predicted the scan
+  /// (LocalizerParams::field_track_*).
+  bool field_tracked = false;
 };
 
 class Localizer {
@@ -232,10 +262,14 @@ class Localizer {
     const RecentScan* recent = nullptr;
     bool see_through = false;
     double depth_tolerance_m = 0.0;
+    const ShapeSlamParams* stages = nullptr;  // in place of params_.stages (the field track's)
   };
   Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
                  const std::optional<Pose2>& odometry_delta, int lost_scans, double min_fit,
                  const TrackingAids& aids) const;
+  std::optional<Verified> FieldTrack(const ScanShapes& shapes, const LaserScan& scan,
+                                     const std::vector<Point2>& samples, const Hypothesis& h,
+                                     double min_fit, const TrackingAids& aids) const;
   void KeepRecent(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot);
   double TrackingMinFit() const;
   Verified Verify(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_sensor,
@@ -244,8 +278,10 @@ class Localizer {
                                             const std::vector<Point2>& samples,
                                             double min_fit) const;
   void PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
+                           const std::vector<Point2>& samples,
                            const std::optional<Pose2>& odometry_delta);
-  void AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan);
+  void AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan,
+                           const std::vector<Point2>& samples);
   void PruneHypotheses();
   LocalizerReport Search(const ScanShapes& shapes, const LaserScan& scan,
                          const std::optional<Pose2>& odometry_delta);
@@ -268,6 +304,7 @@ class Localizer {
   PolylineMap map_;
   std::vector<Polyline> walls_;  // every map polyline, map frame
   WindowSearch global_search_;  // the map's likelihood field and pyramid, built once
+  ShapeSlamParams field_stages_;  // the stages with the field track's prior (FieldTrack)
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   std::optional<RecentScan> recent_;    // tracking only
   LocalizerStatus status_ = LocalizerStatus::kSearching;

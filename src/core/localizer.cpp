@@ -120,6 +120,14 @@ void LocalizerParams::Validate() const {
   InRange(recheck_half_window_m, 0.0, 100.0, "LocalizerParams::recheck_half_window_m");
   InRange(recheck_half_window_rad, 0.0, M_PI, "LocalizerParams::recheck_half_window_rad");
   InRange(recheck_margin, 0.0, 1.0, "LocalizerParams::recheck_margin");
+  InRange(field_track_min_fit, 0.0, 1.0, "LocalizerParams::field_track_min_fit");
+  InRange(field_track_half_window_m, 0.0, 100.0, "LocalizerParams::field_track_half_window_m");
+  InRange(field_track_half_window_rad, 0.0, M_PI, "LocalizerParams::field_track_half_window_rad");
+  InRange(field_track_tie, 0.0, 1.0, "LocalizerParams::field_track_tie");
+  InRange(field_track_check_ratio, 0.0, 1.0, "LocalizerParams::field_track_check_ratio");
+  if (!(field_track_prior_sigma_m > 0.0 && field_track_prior_sigma_m <= 100.0)) {
+    throw std::invalid_argument("LocalizerParams::field_track_prior_sigma_m must be in (0, 100]");
+  }
   if (!(fast_track_min_fit >= 0.0)) {
     throw std::invalid_argument("LocalizerParams::fast_track_min_fit must be >= 0");
   }
@@ -140,7 +148,10 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
       map_(std::move(map)),
       walls_(MapWalls(map_)),
       global_search_(walls_, GlobalSearchParams(params_)),
-      odometry_calibrator_(params_.stages.odometry_calibration) {}
+      field_stages_(params_.stages),
+      odometry_calibrator_(params_.stages.odometry_calibration) {
+  field_stages_.odometry_noise.sigma_xy_m = params_.field_track_prior_sigma_m;
+}
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
   hypotheses_ = {Hypothesis(T_map_robot, 1.0, 0.0, params_.stages.motion_model)};
@@ -192,7 +203,7 @@ Localizer::Verified Localizer::Track(const ScanShapes& shapes, const LaserScan& 
                                      const std::optional<Pose2>& odometry_delta,
                                      int lost_scans, double min_fit,
                                      const TrackingAids& aids) const {
-  const ShapeSlamParams& p = params_.stages;
+  const ShapeSlamParams& p = aids.stages != nullptr ? *aids.stages : params_.stages;
   Pose2 T_map_robot_pred = hypothesis.T_map_robot;
   std::optional<Pose2> velocity_hint;
   if (odometry_delta) {
@@ -273,11 +284,17 @@ void Localizer::Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool co
 // Every kept hypothesis is tracked through the scan; its evidence decays and gains the fit.
 // One that misses lost_after_scans scans in a row is dropped.
 void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
+                                    const std::vector<Point2>& samples,
                                     const std::optional<Pose2>& odometry_delta) {
   std::vector<Hypothesis> kept;
   for (Hypothesis& h : hypotheses_) {
-    const Verified v =
-        Track(shapes, scan, h, odometry_delta, h.misses, params_.min_inlier_ratio, TrackingAids{});
+    std::optional<Verified> field;
+    if (!odometry_delta && params_.field_track_min_fit > 0.0 && h.misses == 0) {
+      field = FieldTrack(shapes, scan, samples, h, params_.min_inlier_ratio, TrackingAids{});
+    }
+    const Verified v = field ? *field
+                             : Track(shapes, scan, h, odometry_delta, h.misses,
+                                     params_.min_inlier_ratio, TrackingAids{});
     Motion(h, v.T_map_robot, v.trusted);
     h.fit = v.fit;
     h.evidence = params_.evidence_decay * h.evidence + v.explained;
@@ -289,9 +306,9 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
 
 // The global search's poses, each verified by the localization with it as a tight prediction;
 // the trusted ones not already kept become new hypotheses.
-void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan) {
-  for (const Verified& v :
-       VerifiedGlobalPoses(shapes, scan, GlobalSamples(shapes), params_.min_inlier_ratio)) {
+void Localizer::AddGlobalHypotheses(const ScanShapes& shapes, const LaserScan& scan,
+                                    const std::vector<Point2>& samples) {
+  for (const Verified& v : VerifiedGlobalPoses(shapes, scan, samples, params_.min_inlier_ratio)) {
     const bool known = std::any_of(hypotheses_.begin(), hypotheses_.end(), [&](const Hypothesis& h) {
       return Near(h.T_map_robot, v.T_map_robot, params_);
     });
@@ -321,8 +338,9 @@ void Localizer::PruneHypotheses() {
 // best wins when it fits well, matched this scan and no rival has comparable evidence.
 LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& scan,
                                   const std::optional<Pose2>& odometry_delta) {
-  PropagateHypotheses(shapes, scan, odometry_delta);
-  AddGlobalHypotheses(shapes, scan);
+  const std::vector<Point2> samples = GlobalSamples(shapes);
+  PropagateHypotheses(shapes, scan, samples, odometry_delta);
+  AddGlobalHypotheses(shapes, scan, samples);
   PruneHypotheses();
   LocalizerReport report;
   report.status = status_;
@@ -364,7 +382,23 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   TrackingAids aids;
   aids.recent = recent_ ? &*recent_ : nullptr;
   aids.see_through = odometry_delta && params_.see_through_margin_m > 0.0;
-  Verified v = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
+  // The map-only steps (the field track, the map's check, the search off the map) score the
+  // same samples (GlobalSamples).
+  const bool field_track = !odometry_delta && params_.field_track_min_fit > 0.0;
+  const std::vector<Point2> samples =
+      field_track || params_.recheck_every > 0 || params_.off_map_fit > 0.0
+          ? GlobalSamples(shapes)
+          : std::vector<Point2>();
+  std::optional<Verified> field;
+  if (field_track) field = FieldTrack(shapes, scan, samples, h, TrackingMinFit(), aids);
+  // Without a field track's pose, or when it fits poorly, the scan is tracked as always (with
+  // odometry, from its prediction; without, from none), and the better fit wins.
+  std::optional<Verified> usual;
+  if (!field || (fit_mean_ > 0.0 && field->fit < params_.field_track_check_ratio * fit_mean_)) {
+    usual = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
+    if (field && usual->trusted && usual->fit > field->fit) field.reset();
+  }
+  Verified v = field ? *field : *usual;
   if (!v.trusted && odometry_delta &&
       params_.retry_depth_tolerance_m > params_.stages.visibility.depth_tolerance_m) {
     aids.depth_tolerance_m = params_.retry_depth_tolerance_m;
@@ -380,6 +414,7 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   report.inlier_ratio = v.fit;
   report.matched = v.trusted;
   report.hypotheses = 1;
+  report.field_tracked = field.has_value();
   const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
   drop_scans_ = dropped ? drop_scans_ + 1 : 0;
   if (v.trusted && !dropped) {
@@ -396,10 +431,6 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
     report.lost_event = true;
     return report;
   }
-  // The map-only checks below score the same samples (GlobalSamples).
-  const std::vector<Point2> samples = params_.recheck_every > 0 || params_.off_map_fit > 0.0
-                                          ? GlobalSamples(shapes)
-                                          : std::vector<Point2>();
   if (v.trusted && !dropped && Recheck(shapes, scan, samples, v)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
@@ -414,6 +445,35 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   report.status = LocalizerStatus::kTracking;
   report.localized = true;
   return report;
+}
+
+// The field track (LocalizerParams::field_track_*), without odometry: the map's likelihood field
+// near the constant-velocity prediction gives the prediction, which the registration refines as
+// an odometry prediction (Track with a zero increment) under the field track's prior and matched
+// at `min_fit`. Nothing when it does not fit field_track_min_fit. `samples`: the scan's
+// (GlobalSamples).
+std::optional<Localizer::Verified> Localizer::FieldTrack(const ScanShapes& shapes,
+                                                         const LaserScan& scan,
+                                                         const std::vector<Point2>& samples,
+                                                         const Hypothesis& h, double min_fit,
+                                                         const TrackingAids& aids) const {
+  if (shapes.coarse.empty() || samples.empty()) return std::nullopt;
+  const Pose2 moved = h.T_map_robot * h.velocity.Predict().value_or(Pose2());
+  const Pose2 T_map_sensor = moved * scan.T_robot_sensor;
+  const std::vector<WindowHypothesis> found =
+      global_search_.Search(samples, T_map_sensor, params_.field_track_half_window_m,
+                            params_.field_track_half_window_rad);
+  if (found.empty()) return std::nullopt;
+  const bool tie =
+      global_search_.Fit(samples, T_map_sensor) >= found.front().fit - params_.field_track_tie;
+  const Pose2 predicted =
+      tie ? moved : found.front().T_model_scan * scan.T_robot_sensor.Inverse();
+  TrackingAids with_prior = aids;
+  with_prior.stages = &field_stages_;
+  const Hypothesis probe(predicted, 0.0, 0.0, params_.stages.motion_model);
+  const Verified v = Track(shapes, scan, probe, Pose2(), 0, min_fit, with_prior);
+  if (!v.trusted || v.fit < params_.field_track_min_fit) return std::nullopt;
+  return v;
 }
 
 // The map's check of the tracked pose (LocalizerParams::recheck_*): every recheck_every matched

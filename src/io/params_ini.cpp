@@ -264,6 +264,12 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "recheck_half_window_m", "... within this (m) ...", &p.recheck_half_window_m},
       {"localizer", "recheck_half_window_rad", "... and this (rad) of the tracked pose ...", &p.recheck_half_window_rad},
       {"localizer", "recheck_margin", "... replaces it when it scores this much more in that field, before and after the registration verified it", &p.recheck_margin},
+      {"localizer", "field_track_min_fit", "without odometry, while tracking, the map's likelihood field predicts the scan: its best pose near the constant velocity's, refined as an odometry prediction, is taken when this fraction of the scan fits (0: off) ...", &p.field_track_min_fit},
+      {"localizer", "field_track_half_window_m", "... the field searched within this (m) ...", &p.field_track_half_window_m},
+      {"localizer", "field_track_half_window_rad", "... and this (rad) of the constant velocity's pose ...", &p.field_track_half_window_rad},
+      {"localizer", "field_track_tie", "... which stays the prediction when the field scores it within this of the best (along a corridor) ...", &p.field_track_tie},
+      {"localizer", "field_track_prior_sigma_m", "... and the refinement's prior has this standard deviation (m) ...", &p.field_track_prior_sigma_m},
+      {"localizer", "field_track_check_ratio", "... but when its fit falls below this times the running mean of the fit, the scan is matched without a prediction as well and the better fit wins (0: never)", &p.field_track_check_ratio},
       {"localizer", "fast_track_min_fit", "with odometry, take the refined prediction without shape matching when this fraction of the scan fits the map, in place of [pipeline] fast_track_min_fit (lower: faster, a few scans a log taken a few degrees off; above 1: off)", &p.fast_track_min_fit},
       {"localizer", "first_pose_confirm_scans", "run --map without --initial: the first localized pose counts once this many more scans matched after it, the tracking never lost (0: at once)", &p.first_pose_confirm_scans},
   };

@@ -407,6 +407,18 @@ TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
   params = LocalizerParams();
   params.recheck_margin = -0.1;
   EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = LocalizerParams();
+  params.field_track_min_fit = 1.5;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = LocalizerParams();
+  params.field_track_half_window_rad = 4.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = LocalizerParams();
+  params.field_track_prior_sigma_m = 0.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = LocalizerParams();
+  params.field_track_check_ratio = -0.5;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
 }
 
 // The map's check (recheck_*) at every scan leaves a right tracking right: around the block
@@ -421,6 +433,33 @@ TEST(LocalizerTest, TheMapsCheckLeavesARightPoseRight) {
     params.stages.use_odometry = odometry;
     EXPECT_EQ(TrackFromTheStart(SceneMap(testing::LoopWorld()), params, run, true), 0)
         << "odometry " << odometry;
+  }
+}
+
+// Without odometry the map's field predicts the scans (field_track_*): around the block, most
+// scans are tracked so and every pose is right; with it off, no scan is, and the poses are as
+// right. (Its speed and its accuracy on real logs: docs/notebook.md, 2026-12-06.)
+TEST(LocalizerTest, WithoutOdometryTheMapsFieldPredictsTheScans) {
+  const SimRun run = Simulate(0, 80, 5);
+  for (const double min_fit : {0.8, 0.0}) {
+    LocalizerParams params;
+    params.stages.use_odometry = false;
+    params.field_track_min_fit = min_fit;
+    Localizer localizer(SceneMap(testing::LoopWorld()), params);
+    localizer.SetInitialPose(run.truth[0]);
+    int field_tracked = 0;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      ASSERT_TRUE(report.localized) << "min_fit " << min_fit << ", scan " << i;
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05))
+          << "min_fit " << min_fit << ", scan " << i;
+      field_tracked += report.field_tracked ? 1 : 0;
+    }
+    if (min_fit > 0.0) {
+      EXPECT_GE(field_tracked, 70) << "of " << run.scans.size();
+    } else {
+      EXPECT_EQ(field_tracked, 0);
+    }
   }
 }
 
