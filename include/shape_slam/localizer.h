@@ -274,6 +274,8 @@ class Localizer {
   double TrackingMinFit() const;
   Verified Verify(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                   double min_fit) const;
+  Verified VerifyRobot(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot,
+                       double min_fit, const TrackingAids& aids) const;
   std::vector<Verified> VerifiedGlobalPoses(const ScanShapes& shapes, const LaserScan& scan,
                                             const std::vector<Point2>& samples,
                                             double min_fit) const;

@@ -254,9 +254,17 @@ std::vector<Point2> Localizer::GlobalSamples(const ScanShapes& shapes) const {
 // tight prediction, matched at min_fit or not.
 Localizer::Verified Localizer::Verify(const ScanShapes& shapes, const LaserScan& scan,
                                       const Pose2& T_map_sensor, double min_fit) const {
-  const Hypothesis probe(T_map_sensor * scan.T_robot_sensor.Inverse(), 0.0, 0.0,
-                         params_.stages.motion_model);
-  return Track(shapes, scan, probe, Pose2(), 0, min_fit, TrackingAids{});
+  return VerifyRobot(shapes, scan, T_map_sensor * scan.T_robot_sensor.Inverse(), min_fit,
+                     TrackingAids{});
+}
+
+// A robot pose verified as Verify does, with `aids` (the field track's: the recent scan, its
+// prior).
+Localizer::Verified Localizer::VerifyRobot(const ScanShapes& shapes, const LaserScan& scan,
+                                           const Pose2& T_map_robot, double min_fit,
+                                           const TrackingAids& aids) const {
+  const Hypothesis probe(T_map_robot, 0.0, 0.0, params_.stages.motion_model);
+  return Track(shapes, scan, probe, Pose2(), 0, min_fit, aids);
 }
 
 // The branch and bound over the whole map (all turns) for `samples` (GlobalSamples): its best
@@ -470,8 +478,7 @@ std::optional<Localizer::Verified> Localizer::FieldTrack(const ScanShapes& shape
       tie ? moved : found.front().T_model_scan * scan.T_robot_sensor.Inverse();
   TrackingAids with_prior = aids;
   with_prior.stages = &field_stages_;
-  const Hypothesis probe(predicted, 0.0, 0.0, params_.stages.motion_model);
-  const Verified v = Track(shapes, scan, probe, Pose2(), 0, min_fit, with_prior);
+  const Verified v = VerifyRobot(shapes, scan, predicted, min_fit, with_prior);
   if (!v.trusted || v.fit < params_.field_track_min_fit) return std::nullopt;
   return v;
 }
