@@ -58,6 +58,17 @@ expect 0 "wrong closures in the graph: " -- python3 "$TOOLS/loop_errors.py" "$WO
 expect 2 "loop_errors: .*no-such" -- python3 "$TOOLS/loop_errors.py" "$WORK/no-such.csv" \
   "$WORK/head/trajectory.tum"
 expect 0 "usage: loop_errors.py" -- python3 "$TOOLS/loop_errors.py" --help
+# bench/tools/heading_drift.py: a trajectory turned 0.001 rad more at every step than its
+# reference drifts +0.0573 deg a step; the log's odometry is measured beside it.
+awk '!/^#/ { print $1, $2, $3, 2 * atan2($7, $8) }' "$WORK/head/trajectory.tum" > "$WORK/ref.txt"
+awk '{ print $1, $2, $3, $4 + 0.001 * NR }' "$WORK/ref.txt" > "$WORK/turned.txt"
+expect 0 "trajectory: heading drift .* deg over [0-9]+ steps \\(\\+0\\.0573 deg a step" -- \
+  python3 "$TOOLS/heading_drift.py" "$WORK/turned.txt" "$WORK/ref.txt" --max-dt 0.01
+expect 0 "odometry: heading drift" -- python3 "$TOOLS/heading_drift.py" "$WORK/ref.txt" \
+  "$WORK/ref.txt" --log "$LOG" --max-dt 0.01
+expect 2 "heading_drift: .*no-such" -- python3 "$TOOLS/heading_drift.py" "$WORK/no-such.tum" \
+  "$WORK/ref.txt"
+expect 0 "usage: heading_drift.py" -- python3 "$TOOLS/heading_drift.py" --help
 head -c 2 "$WORK/head/map.pgm" | grep -q P5 || fail "map.pgm is not a binary PGM"
 grep -qx "image: map.pgm" "$WORK/head/map.yaml" || fail "map.yaml does not name map.pgm"
 grep -qx "resolution: 0.05" "$WORK/head/map.yaml" || fail "map.yaml: default resolution not 0.05"
