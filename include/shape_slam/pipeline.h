@@ -207,13 +207,22 @@ struct ShapeSlamParams {
   double fast_track_min_fit = 0.95;
   double fast_track_max_correction_m = 0.15;    ///< metres
   double fast_track_max_correction_rad = 0.05;  ///< radians
-  /// Keyframe track (not in the paper), with odometry only: a scan whose prediction lies short of
-  /// the next keyframe (keyframe.min_*) gets the fast track against the last keyframe's
-  /// polylines alone, fit at least this, before the map's visible shape is even computed; the
-  /// map is matched as usual only when that falls short. Such a scan only gives a pose, which
-  /// the next keyframe's match against the map checks: on dense logs most scans are of this
-  /// kind. Above 1: off.
+  /// Keyframe track (not in the paper): with odometry (and without, keyframe_track_without_odometry)
+  /// a scan whose prediction lies short of the next keyframe (keyframe.min_*) gets the fast
+  /// track against the last keyframe's polylines alone, fit at least this, before the map's
+  /// visible shape is even computed; the map is matched as usual only when that falls short.
+  /// Such a scan mostly gives only a pose, which the next keyframe's match against the map checks
+  /// (it is a keyframe itself only where its refined pose crosses keyframe.min_*): on dense logs
+  /// most scans are of this kind. Above 1: off.
   double keyframe_track_min_fit = 0.85;
+  /// The keyframe track without odometry as well (after a trusted match): the constant-velocity
+  /// motion stands for the odometry's increment, its prediction and prior, and the estimate may
+  /// turn up to keyframe_track_turn_without_odometry_rad from it (a constant velocity lags a
+  /// turn that speeds up: at fast_track_max_correction_rad, 0.05, freiburg-079 copy 0 lost 669
+  /// of its 2700 scans between keyframes to that gate alone). Only dense logs have scans short
+  /// of the next keyframe; a log whose scans are all keyframes is unchanged.
+  bool keyframe_track_without_odometry = true;
+  double keyframe_track_turn_without_odometry_rad = 0.2;
   /// Cell size of the map's spatial index, metres.
   double index_cell_size_m = 2.0;
   /// Scan-to-scan registration without a guess (scan_matcher.h: `shape-slam match`, the MRPT
@@ -422,6 +431,9 @@ class ShapeSlam {
                                     const std::optional<Pose2>& velocity_hint,
                                     std::vector<Polyline> recent_fine,
                                     std::vector<VisiblePolyline>& visible) const;
+  bool KeyframeTrackWithoutOdometry(const ScanShapes& shapes, const LaserScan& scan,
+                                    const Prediction& prediction, const Pose2& T_map_sensor_pred,
+                                    internal::Localization& loc) const;
   bool OdometrySupportsOverride(const Pose2& match_step, const Pose2& odometry_step) const;
   void CheckOdometry(const ScanShapes& shapes, const LaserScan& scan,
                      const Pose2& T_map_sensor_pred, const Pose2& T_map_sensor_last,
@@ -486,6 +498,7 @@ class ShapeSlam {
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
   OdometryCalibrator odometry_calibrator_;  // the log's odometry heading error
   ShapeSlamParams tracking_params_;      // params_ with the learned odometry noise
+  ShapeSlamParams keyframe_stages_;      // params_ for the keyframe track without odometry
   ConstantVelocity velocity_;            // the last motions: the prediction without odometry
   double travel_m_ = 0.0;
   int lost_scans_ = 0;  // consecutive scans without a trusted match

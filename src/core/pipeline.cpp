@@ -63,6 +63,11 @@ void ShapeSlamParams::Validate() const {
   NonNegative(fast_track_max_correction_m, "ShapeSlamParams::fast_track_max_correction_m");
   NonNegative(fast_track_max_correction_rad, "ShapeSlamParams::fast_track_max_correction_rad");
   NonNegative(keyframe_track_min_fit, "ShapeSlamParams::keyframe_track_min_fit");
+  if (!(keyframe_track_turn_without_odometry_rad >= 0.0 &&
+        keyframe_track_turn_without_odometry_rad <= M_PI)) {
+    throw std::invalid_argument(
+        "ShapeSlamParams::keyframe_track_turn_without_odometry_rad must be in [0, pi]");
+  }
   if (!(max_untrusted_coverage >= 0.0 && max_untrusted_coverage <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::max_untrusted_coverage must be in [0, 1]");
   }
@@ -145,8 +150,10 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
       odometry_noise_(params.odometry_noise),
       odometry_calibrator_(params.odometry_calibration),
       tracking_params_(params),
+      keyframe_stages_(params),
       velocity_(params.motion_model) {
   params_.Validate();
+  keyframe_stages_.fast_track_max_correction_rad = params_.keyframe_track_turn_without_odometry_rad;
   if (!params_.use_odometry) odometry_.status = OdometryStatus::kDisabled;
 }
 
@@ -610,6 +617,8 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
     r.loc = internal::TrackKeyframe(shapes, recent_fine, *prediction.odometry_delta,
                                     tracking_params_);
     report.keyframe_tracked = r.loc.fast_track;
+  } else if (KeyframeTrackWithoutOdometry(shapes, scan, prediction, T_map_sensor_pred, r.loc)) {
+    report.keyframe_tracked = true;
   }
   r.model_empty = TrackingMap().Empty();
   if (r.model_empty && keyframes_.empty() && !initial_map_.Empty() && !shapes.coarse.empty()) {
@@ -639,6 +648,34 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
     report.odometry_overridden = r.loc.odometry_overridden;
   }
   return r;
+}
+
+// The keyframe track without odometry (ShapeSlamParams::keyframe_track_without_odometry): after a
+// trusted match, a scan that the constant-velocity motion leaves short of the next keyframe gets
+// the fast track against the last keyframe alone, that motion standing for the odometry's
+// increment, its estimate turning at most keyframe_track_turn_without_odometry_rad from it
+// (keyframe_stages_). Sets `loc` (relative to T_map_sensor_pred, the last pose) and returns true
+// only when it fits keyframe_track_min_fit.
+bool ShapeSlam::KeyframeTrackWithoutOdometry(const ScanShapes& shapes, const LaserScan& scan,
+                                             const Prediction& prediction,
+                                             const Pose2& T_map_sensor_pred,
+                                             internal::Localization& loc) const {
+  if (!params_.keyframe_track_without_odometry || params_.keyframe_track_min_fit > 1.0 ||
+      prediction.odometry_delta || !prediction.T_pred_robot_velocity || lost_scans_ > 0 ||
+      keyframes_.empty() || shapes.coarse.empty()) {
+    return false;
+  }
+  const Pose2& motion = *prediction.T_pred_robot_velocity;
+  if (IsKeyframe(prediction.T_map_robot * motion)) return false;
+  const Pose2 T_pred_moved = MotionInFrame(motion, scan.T_robot_sensor);
+  const std::vector<Polyline> keyframe_fine =
+      LastKeyframeIn(places_.back().shapes.fine, T_map_sensor_pred * T_pred_moved);
+  internal::Localization tracked =
+      internal::TrackKeyframe(shapes, keyframe_fine, motion, keyframe_stages_);
+  if (!tracked.fast_track) return false;
+  tracked.correction = T_pred_moved * tracked.correction;
+  loc = std::move(tracked);
+  return true;
 }
 
 // A trusted registration that the odometry did not override teaches the odometry model: what the

@@ -66,6 +66,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "fast_track_max_correction_m", "... and it lies within this of the prediction (m) ...", &p.fast_track_max_correction_m},
       {"pipeline", "fast_track_max_correction_rad", "... and this (rad)", &p.fast_track_max_correction_rad},
       {"pipeline", "keyframe_track_min_fit", "with odometry, a scan predicted short of the next keyframe first gets the fast track against the last keyframe alone, at this fit (the map only if that falls short; above 1: off)", &p.keyframe_track_min_fit},
+      {"pipeline", "keyframe_track_without_odometry", "... and without odometry too, the constant-velocity motion standing for the odometry's (after a trusted match)", &p.keyframe_track_without_odometry},
+      {"pipeline", "keyframe_track_turn_without_odometry_rad", "... its estimate turning at most this from the constant-velocity prediction (rad)", &p.keyframe_track_turn_without_odometry_rad},
       {"pipeline", "coarse_gate_m", "the refinement against the whole visible map starts with this wider gate (m)", &p.coarse_gate_m},
       {"pipeline", "index_cell_size_m", "cell size of the map's spatial index (m)", &p.index_cell_size_m},
       {"visibility", "max_range_m", "map polylines farther than this from the sensor are not visible (m)", &p.visibility.max_range_m},
