@@ -650,12 +650,12 @@ ShapeSlam::Registration ShapeSlam::Register(const ScanShapes& shapes, const Lase
   return r;
 }
 
-// The keyframe track without odometry (ShapeSlamParams::keyframe_track_without_odometry): after a
-// trusted match, a scan that the constant-velocity motion leaves short of the next keyframe gets
-// the fast track against the last keyframe alone, that motion standing for the odometry's
-// increment, its estimate turning at most keyframe_track_turn_without_odometry_rad from it
-// (keyframe_stages_). Sets `loc` (relative to T_map_sensor_pred, the last pose) and returns true
-// only when it fits keyframe_track_min_fit.
+// The keyframe track without odometry (ShapeSlamParams::keyframe_track_without_odometry; also
+// while the odometry stalls): after a trusted match, a scan that the constant-velocity motion
+// leaves short of the next keyframe gets the fast track against the last keyframe alone, that
+// motion standing for the odometry's increment, its estimate turning at most
+// keyframe_track_turn_without_odometry_rad from it (keyframe_stages_). Sets `loc` (relative to
+// T_map_sensor_pred, the last pose) and returns true only when it fits keyframe_track_min_fit.
 bool ShapeSlam::KeyframeTrackWithoutOdometry(const ScanShapes& shapes, const LaserScan& scan,
                                              const Prediction& prediction,
                                              const Pose2& T_map_sensor_pred,
@@ -673,7 +673,11 @@ bool ShapeSlam::KeyframeTrackWithoutOdometry(const ScanShapes& shapes, const Las
   internal::Localization tracked =
       internal::TrackKeyframe(shapes, keyframe_fine, motion, keyframe_stages_);
   if (!tracked.fast_track) return false;
+  // From the moved frame to the last pose's: the correction composed, its covariance rotated.
   tracked.correction = T_pred_moved * tracked.correction;
+  Eigen::Matrix3d rotate = Eigen::Matrix3d::Identity();
+  rotate.topLeftCorner<2, 2>() = T_pred_moved.Rotation();
+  tracked.covariance = rotate * tracked.covariance * rotate.transpose();
   loc = std::move(tracked);
   return true;
 }
