@@ -218,8 +218,8 @@ struct ShapeSlamParams {
   /// The keyframe track without odometry as well (after a trusted match): the constant-velocity
   /// motion stands for the odometry's increment, its prediction and prior, and the estimate may
   /// turn up to keyframe_track_turn_without_odometry_rad from it (a constant velocity lags a
-  /// turn that speeds up: at fast_track_max_correction_rad, 0.05, freiburg-079 copy 0 lost 669
-  /// of its 2700 scans between keyframes to that gate alone). Only dense logs have scans short
+  /// turn that speeds up: of freiburg-079 copy 0's 2700 scans between keyframes, 669 turned
+  /// more than fast_track_max_correction_rad, 0.05, from it). Only dense logs have scans short
   /// of the next keyframe; a log whose scans are all keyframes is unchanged.
   bool keyframe_track_without_odometry = true;
   double keyframe_track_turn_without_odometry_rad = 0.2;
