@@ -4,8 +4,9 @@
 `eval` reports the mean absolute error of consecutive relations; a small bias of the same sign at
 every step hides in it, yet it bends a long corridor (infinite-corridor: -0.024 deg a step of
 the tracking with loop closure off, -47 deg over the log, while its odometry drifts -3.4 deg).
-For each pair of consecutive trajectory poses that both have a reference pose (associated by
-timestamp, as `eval` does), the step's heading change less the reference's, in degrees; then
+For each two successive reference poses that both have a trajectory pose (associated by
+timestamp, as `eval` does), the trajectory's heading change between them less the reference's,
+in degrees; then
 their sum, mean and median absolute value, in all and split by the reference's turn in that
 step (right turns, straight within --straight-deg, left turns). With --log, the same figures
 for the log's own odometry (CARMEN FLASER / ROBOTLASER1 poses), the baseline the scans should
@@ -35,7 +36,7 @@ import variants  # noqa: E402
 
 
 def step_errors(poses, reference, max_dt):
-    """[(error_deg, reference_turn_deg)] of consecutive poses that both have a reference pose."""
+    """[(error_deg, reference_turn_deg)] between successive reference poses with a pose each."""
     pairs = trajectories.associate(poses, reference, max_dt)  # in reference (time) order
     out = []
     for (e0, r0), (e1, r1) in zip(pairs, pairs[1:]):
