@@ -6,11 +6,10 @@ every step hides in it, yet it bends a long corridor (infinite-corridor: -0.024 
 the tracking with loop closure off, -47 deg over the log, while its odometry drifts -3.4 deg).
 For each two successive reference poses that both have a trajectory pose (associated by
 timestamp, as `eval` does), the trajectory's heading change between them less the reference's,
-in degrees; then
-their sum, mean and median absolute value, in all and split by the reference's turn in that
-step (right turns, straight within --straight-deg, left turns). With --log, the same figures
-for the log's own odometry (CARMEN FLASER / ROBOTLASER1 poses), the baseline the scans should
-beat.
+in degrees; then their sum, mean and median absolute value, in all and split by the
+reference's turn in that step (right turns, straight within --straight-deg, left turns). With
+--log, the same figures for the log's own odometry (CARMEN FLASER / ROBOTLASER1 poses), the
+baseline the scans should beat.
 
   bench/tools/heading_drift.py OUT/trajectory.tum datasets/radish/intel.gt.txt
   bench/tools/heading_drift.py OUT/trajectory.tum GT --log LOG.log.gz   # and the odometry
