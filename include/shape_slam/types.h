@@ -58,6 +58,14 @@ inline Pose2 MotionInFrame(const Pose2& T_body_motion, const Pose2& T_body_frame
   return T_body_frame.Inverse() * T_body_motion * T_body_frame;
 }
 
+/// A covariance of (x, y, theta) given in frame b, in frame a (T_a_b: only its rotation acts,
+/// on the (x, y) block): R * covariance * R^T with R = diag(T_a_b's rotation, 1).
+inline Eigen::Matrix3d CovarianceInFrame(const Eigen::Matrix3d& covariance, const Pose2& T_a_b) {
+  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
+  R.topLeftCorner<2, 2>() = T_a_b.Rotation();
+  return R * covariance * R.transpose();
+}
+
 /// Whether two poses lie closer than max_m in translation and max_rad in heading.
 inline bool PosesWithin(const Pose2& a, const Pose2& b, double max_m, double max_rad) {
   return (a.Translation() - b.Translation()).norm() < max_m &&

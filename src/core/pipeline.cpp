@@ -675,9 +675,7 @@ bool ShapeSlam::KeyframeTrackWithoutOdometry(const ScanShapes& shapes, const Las
   if (!tracked.fast_track) return false;
   // From the moved frame to the last pose's: the correction composed, its covariance rotated.
   tracked.correction = T_pred_moved * tracked.correction;
-  Eigen::Matrix3d rotate = Eigen::Matrix3d::Identity();
-  rotate.topLeftCorner<2, 2>() = T_pred_moved.Rotation();
-  tracked.covariance = rotate * tracked.covariance * rotate.transpose();
+  tracked.covariance = CovarianceInFrame(tracked.covariance, T_pred_moved);
   loc = std::move(tracked);
   return true;
 }

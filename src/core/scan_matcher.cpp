@@ -118,9 +118,7 @@ ScanMatchResult MatchScans(const LaserScan& scan_i, const LaserScan& scan_j,
   result.T_i_j = to_robot(registered.T_model_scan);
   // Covariance of the robot pose: the sensor offsets are constant, so it transforms with the
   // rotation of scan I's sensor on the robot.
-  Eigen::Matrix3d J = Eigen::Matrix3d::Identity();
-  J.topLeftCorner<2, 2>() = scan_i.T_robot_sensor.Rotation();
-  result.covariance = J * registered.covariance * J.transpose();
+  result.covariance = CovarianceInFrame(registered.covariance, scan_i.T_robot_sensor);
   result.iterations = registered.iterations;
   result.rms_error_m = registered.rms_error_m;
   result.inlier_ratio = registered.fit;

@@ -283,9 +283,7 @@ mrpt::poses::CPose3DPDF::Ptr CMetricMapBuilderShape::getCurrentPoseEstimation() 
         noise.sigma_theta_rad * noise.sigma_theta_rad;
   }
   // Rotate the (x, y) block from the map frame into the world frame.
-  Eigen::Matrix3d R = Eigen::Matrix3d::Identity();
-  R.topLeftCorner<2, 2>() = T_world_map_.Rotation();
-  const Eigen::Matrix3d cov_world = R * cov_map * R.transpose();
+  const Eigen::Matrix3d cov_world = CovarianceInFrame(cov_map, T_world_map_);
   return mrpt::poses::CPose3DPDFGaussian::Create(
       mrpt::poses::CPose3D(T.x, T.y, 0.0, T.theta, 0.0, 0.0), ToCovariance6(cov_world));
 }
