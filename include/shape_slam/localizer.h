@@ -287,6 +287,10 @@ class Localizer {
   void PruneHypotheses();
   LocalizerReport Search(const ScanShapes& shapes, const LaserScan& scan,
                          const std::optional<Pose2>& odometry_delta);
+  Verified RegisterTracked(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& h,
+                           const std::optional<Pose2>& odometry_delta,
+                           const std::vector<Point2>& samples, TrackingAids& aids,
+                           bool& field_tracked) const;
   LocalizerReport TrackPose(const ScanShapes& shapes, const LaserScan& scan,
                             const std::optional<Pose2>& raw_odometry_delta);
   std::optional<Pose2> Calibrated(const std::optional<Pose2>& raw_odometry_delta) const;

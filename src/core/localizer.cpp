@@ -381,6 +381,35 @@ double Localizer::TrackingMinFit() const {
   return std::min(params_.min_inlier_ratio, params_.relative_inlier_ratio * fit_mean_);
 }
 
+// The tracked pose's registration: the field track (without odometry) first; the usual track
+// (with odometry from its prediction, without from none) when there is no field pose or it fits
+// poorly, the better fit winning; with odometry, a retry with a wider occlusion tolerance when
+// nothing was trusted. `field_tracked` says whether the field track's pose was taken.
+Localizer::Verified Localizer::RegisterTracked(const ScanShapes& shapes, const LaserScan& scan,
+                                               const Hypothesis& h,
+                                               const std::optional<Pose2>& odometry_delta,
+                                               const std::vector<Point2>& samples,
+                                               TrackingAids& aids, bool& field_tracked) const {
+  std::optional<Verified> field;
+  if (!odometry_delta && params_.field_track_min_fit > 0.0) {
+    field = FieldTrack(shapes, scan, samples, h, TrackingMinFit(), aids);
+  }
+  std::optional<Verified> usual;
+  if (!field || (fit_mean_ > 0.0 && field->fit < params_.field_track_check_ratio * fit_mean_)) {
+    usual = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
+    if (field && usual->trusted && usual->fit > field->fit) field.reset();
+  }
+  field_tracked = field.has_value();
+  Verified v = field ? *field : *usual;
+  if (!v.trusted && odometry_delta &&
+      params_.retry_depth_tolerance_m > params_.stages.visibility.depth_tolerance_m) {
+    aids.depth_tolerance_m = params_.retry_depth_tolerance_m;
+    const Verified wider = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
+    if (wider.trusted) v = wider;
+  }
+  return v;
+}
+
 // Localized: the one pose is tracked; too many scans without a trusted match, or a fit that
 // stays far below its running mean, mean the robot is lost (or was carried away).
 LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& scan,
@@ -397,22 +426,8 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
       field_track || params_.recheck_every > 0 || params_.off_map_fit > 0.0
           ? GlobalSamples(shapes)
           : std::vector<Point2>();
-  std::optional<Verified> field;
-  if (field_track) field = FieldTrack(shapes, scan, samples, h, TrackingMinFit(), aids);
-  // Without a field track's pose, or when it fits poorly, the scan is tracked as always (with
-  // odometry, from its prediction; without, from none), and the better fit wins.
-  std::optional<Verified> usual;
-  if (!field || (fit_mean_ > 0.0 && field->fit < params_.field_track_check_ratio * fit_mean_)) {
-    usual = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
-    if (field && usual->trusted && usual->fit > field->fit) field.reset();
-  }
-  Verified v = field ? *field : *usual;
-  if (!v.trusted && odometry_delta &&
-      params_.retry_depth_tolerance_m > params_.stages.visibility.depth_tolerance_m) {
-    aids.depth_tolerance_m = params_.retry_depth_tolerance_m;
-    const Verified wider = Track(shapes, scan, h, odometry_delta, h.misses, TrackingMinFit(), aids);
-    if (wider.trusted) v = wider;
-  }
+  bool field_tracked = false;
+  Verified v = RegisterTracked(shapes, scan, h, odometry_delta, samples, aids, field_tracked);
   Motion(h, v.T_map_robot, v.trusted);
   h.fit = v.fit;
   h.evidence = params_.evidence_decay * h.evidence + v.explained;
@@ -422,7 +437,7 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   report.inlier_ratio = v.fit;
   report.matched = v.trusted;
   report.hypotheses = 1;
-  report.field_tracked = field.has_value();
+  report.field_tracked = field_tracked;
   const bool dropped = fit_mean_ > 0.0 && v.fit < params_.fit_drop_ratio * fit_mean_;
   drop_scans_ = dropped ? drop_scans_ + 1 : 0;
   if (v.trusted && !dropped) {
