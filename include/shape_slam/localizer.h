@@ -272,6 +272,7 @@ class Localizer {
                                      double min_fit, const TrackingAids& aids) const;
   void KeepRecent(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot);
   double TrackingMinFit() const;
+  bool FieldTrackOn(const std::optional<Pose2>& odometry_delta) const;
   Verified Verify(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_sensor,
                   double min_fit) const;
   Verified VerifyRobot(const ScanShapes& shapes, const LaserScan& scan, const Pose2& T_map_robot,

@@ -297,7 +297,7 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
   std::vector<Hypothesis> kept;
   for (Hypothesis& h : hypotheses_) {
     std::optional<Verified> field;
-    if (!odometry_delta && params_.field_track_min_fit > 0.0 && h.misses == 0) {
+    if (FieldTrackOn(odometry_delta) && h.misses == 0) {
       field = FieldTrack(shapes, scan, samples, h, params_.min_inlier_ratio, TrackingAids{});
     }
     const Verified v = field ? *field
@@ -374,6 +374,11 @@ LocalizerReport Localizer::Search(const ScanShapes& shapes, const LaserScan& sca
   return report;
 }
 
+// The field track (LocalizerParams::field_track_*) serves scans without odometry when it is on.
+bool Localizer::FieldTrackOn(const std::optional<Pose2>& odometry_delta) const {
+  return !odometry_delta && params_.field_track_min_fit > 0.0;
+}
+
 // While tracking, the fit a scan needs to be matched: min_inlier_ratio, or
 // relative_inlier_ratio times the running mean of the fit when that is lower.
 double Localizer::TrackingMinFit() const {
@@ -391,7 +396,7 @@ Localizer::Verified Localizer::RegisterTracked(const ScanShapes& shapes, const L
                                                const std::vector<Point2>& samples,
                                                TrackingAids& aids, bool& field_tracked) const {
   std::optional<Verified> field;
-  if (!odometry_delta && params_.field_track_min_fit > 0.0) {
+  if (FieldTrackOn(odometry_delta)) {
     field = FieldTrack(shapes, scan, samples, h, TrackingMinFit(), aids);
   }
   std::optional<Verified> usual;
@@ -421,9 +426,8 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
   aids.see_through = odometry_delta && params_.see_through_margin_m > 0.0;
   // The map-only steps (the field track, the map's check, the search off the map) score the
   // same samples (GlobalSamples).
-  const bool field_track = !odometry_delta && params_.field_track_min_fit > 0.0;
   const std::vector<Point2> samples =
-      field_track || params_.recheck_every > 0 || params_.off_map_fit > 0.0
+      FieldTrackOn(odometry_delta) || params_.recheck_every > 0 || params_.off_map_fit > 0.0
           ? GlobalSamples(shapes)
           : std::vector<Point2>();
   bool field_tracked = false;
