@@ -168,6 +168,16 @@ struct LocalizerParams {
   /// be a look-alike place, whose tracking then fails within a few scans; a continued map built
   /// on it is wrong for good (aces two sessions, one copy of five: 16 m ATE).
   int first_pose_confirm_scans = 3;
+  /// While searching, a pose the registration does not match at once is not tried again: the
+  /// poses of a search (the global one, the recheck, the search off the map) are verified, and
+  /// the hypotheses of a robot that is lost or ambiguous are tracked after a scan they missed,
+  /// without the second attempt of a tracked scan (with odometry the window search around the
+  /// pose, window_search_fallback; without, more seed pairs, thorough_retry): the search comes
+  /// back at the next scan anyway. The second attempts were most of the slowest scans' time
+  /// (infinite-corridor's second half in its first half's map without odometry: four
+  /// hypotheses tracked after a miss, 53 ms each, and eight poses of the global search, up to
+  /// 10 ms each when they fail). true: the second attempts as in tracking.
+  bool search_retry = false;
   /// The fast track's fit while tracking in the map, in place of the mapper's
   /// (ShapeSlamParams::fast_track_min_fit, with odometry: the prediction refined alone is taken
   /// when this fraction of the scan fits the map before and after; above 1: off). The same 0.95
@@ -312,6 +322,7 @@ class Localizer {
   std::vector<Polyline> walls_;  // every map polyline, map frame
   WindowSearch global_search_;  // the map's likelihood field and pyramid, built once
   ShapeSlamParams field_stages_;  // the stages with the field track's prior (FieldTrack)
+  ShapeSlamParams search_stages_;  // the stages of a search's registrations (search_retry)
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   std::optional<RecentScan> recent_;    // tracking only
   LocalizerStatus status_ = LocalizerStatus::kSearching;

@@ -137,6 +137,10 @@ struct ShapeSlamParams {
   /// the search window grow by 1 + k, up to this factor (the robot went on while we were lost);
   /// such scans are placed at the constant-velocity prediction.
   double max_lost_growth = 3.0;
+  /// Without odometry, a scan that found no trusted match is matched again with the seed counts
+  /// of scan-to-scan matching (scan_match_*); localize turns this off while it searches
+  /// (LocalizerParams::search_retry).
+  bool thorough_retry = true;
   /// With odometry, an estimate farther than this many standard deviations (Mahalanobis, of
   /// the odometry noise model) from the prediction is rejected as a false match.
   double max_prior_mahalanobis = 4.0;

@@ -269,9 +269,9 @@ Localization Localize(const Shapes& shapes, const LocalModel& model,
       !odometry_delta && params.window_search_without_odometry ? search.growth() : 0.0;
   if (!loc.fast_track) search.Run(params.matcher, window_scale, loc);
   // A scan that found no trusted match tries again: without odometry with as many seed pairs
-  // as scan-to-scan matching uses (scan_match_*), with odometry with the window search around
-  // the prediction (window_search_fallback). Needed only for the odd scan.
-  if (!loc.trusted && !odometry_delta) {
+  // as scan-to-scan matching uses (scan_match_*; thorough_retry), with odometry with the window
+  // search around the prediction (window_search_fallback). Needed only for the odd scan.
+  if (!loc.trusted && !odometry_delta && params.thorough_retry) {
     ShapeMatcherParams thorough = params.matcher;
     thorough.max_seed_pairs = params.scan_match_seed_pairs;
     thorough.num_seeds = params.scan_match_seeds;

@@ -149,8 +149,13 @@ Localizer::Localizer(PolylineMap map, const LocalizerParams& params)
       walls_(MapWalls(map_)),
       global_search_(walls_, GlobalSearchParams(params_)),
       field_stages_(params_.stages),
+      search_stages_(params_.stages),
       odometry_calibrator_(params_.stages.odometry_calibration) {
   field_stages_.odometry_noise.sigma_xy_m = params_.field_track_prior_sigma_m;
+  if (!params_.search_retry) {
+    search_stages_.window_search_fallback = false;
+    search_stages_.thorough_retry = false;
+  }
 }
 
 void Localizer::SetInitialPose(const Pose2& T_map_robot) {
@@ -254,8 +259,9 @@ std::vector<Point2> Localizer::GlobalSamples(const ScanShapes& shapes) const {
 // tight prediction, matched at min_fit or not.
 Localizer::Verified Localizer::Verify(const ScanShapes& shapes, const LaserScan& scan,
                                       const Pose2& T_map_sensor, double min_fit) const {
-  return VerifyRobot(shapes, scan, T_map_sensor * scan.T_robot_sensor.Inverse(), min_fit,
-                     TrackingAids{});
+  TrackingAids aids;
+  aids.stages = &search_stages_;
+  return VerifyRobot(shapes, scan, T_map_sensor * scan.T_robot_sensor.Inverse(), min_fit, aids);
 }
 
 // A robot pose verified as Verify does, with `aids` (the field track's: the recent scan, its
@@ -289,8 +295,9 @@ void Localizer::Motion(Hypothesis& hypothesis, const Pose2& T_map_robot, bool co
   hypothesis.T_map_robot = T_map_robot;
 }
 
-// Every kept hypothesis is tracked through the scan; its evidence decays and gains the fit.
-// One that misses lost_after_scans scans in a row is dropped.
+// Every kept hypothesis is tracked through the scan (after a miss as a search's pose is verified,
+// search_retry); its evidence decays and gains the fit. One that misses lost_after_scans scans
+// in a row is dropped.
 void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& scan,
                                     const std::vector<Point2>& samples,
                                     const std::optional<Pose2>& odometry_delta) {
@@ -300,9 +307,11 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
     if (FieldTrackOn(odometry_delta) && h.misses == 0) {
       field = FieldTrack(shapes, scan, samples, h, params_.min_inlier_ratio, TrackingAids{});
     }
+    TrackingAids aids;
+    if (h.misses > 0) aids.stages = &search_stages_;
     const Verified v = field ? *field
                              : Track(shapes, scan, h, odometry_delta, h.misses,
-                                     params_.min_inlier_ratio, TrackingAids{});
+                                     params_.min_inlier_ratio, aids);
     Motion(h, v.T_map_robot, v.trusted);
     h.fit = v.fit;
     h.evidence = params_.evidence_decay * h.evidence + v.explained;

@@ -59,6 +59,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"pipeline", "odometry_override_judged_step_m", "... judged so only where the odometry's step is at least this long (m)", &p.odometry_override_judged_step_m},
       {"pipeline", "stale_odometry_min_step_m", "a scan whose odometry pose equals the last scan's while the robot's recent steps reached this (m) is matched without odometry: the odometry stalled (a large value, e.g. 1000: off)", &p.stale_odometry_min_step_m},
       {"pipeline", "max_lost_growth", "without odometry, bound and window grow by 1 + scans without a match, up to this", &p.max_lost_growth},
+      {"pipeline", "thorough_retry", "without odometry, a scan that found no trusted match is matched again with [scan_match]'s seed counts", &p.thorough_retry},
       {"pipeline", "max_untrusted_coverage", "an unconfirmed scan updates the map only if less than this fraction of it is near the map", &p.max_untrusted_coverage},
       {"pipeline", "new_territory_distance_m", "'near the map' distance of that rule (m)", &p.new_territory_distance_m},
       {"pipeline", "min_inlier_ratio", "a match is trusted when this fraction of the scan lies on the map after it", &p.min_inlier_ratio},
@@ -273,6 +274,7 @@ std::vector<Field> LocalizerFields(LocalizerParams& p) {
       {"localizer", "field_track_prior_sigma_m", "... and the refinement's prior has this standard deviation (m) ...", &p.field_track_prior_sigma_m},
       {"localizer", "field_track_check_ratio", "... but when its fit falls below this times the running mean of the fit, the scan is matched without a prediction as well and the better fit wins (0: never)", &p.field_track_check_ratio},
       {"localizer", "fast_track_min_fit", "with odometry, take the refined prediction without shape matching when this fraction of the scan fits the map, in place of [pipeline] fast_track_min_fit (lower: faster, a few scans a log taken a few degrees off; above 1: off)", &p.fast_track_min_fit},
+      {"localizer", "search_retry", "while searching (the global search's poses verified, the hypotheses of a lost or ambiguous robot tracked after a miss), a pose the registration does not match at once is tried again as a tracked scan is (false: not; the search comes back at the next scan)", &p.search_retry},
       {"localizer", "first_pose_confirm_scans", "run --map without --initial: the first localized pose counts once this many more scans matched after it, the tracking never lost (0: at once)", &p.first_pose_confirm_scans},
   };
 }

@@ -108,22 +108,28 @@ TEST(LocalizerTest, TracksFromAGivenInitialPose) {
   EXPECT_EQ(localizer.Map().NumPolylines(), testing::LoopWorld().size());  // unchanged
 }
 
+// With and without the search's second attempts (search_retry).
 TEST(LocalizerTest, FindsTheRobotWithoutAnInitialPoseWithinFiveScans) {
-  for (const int corner : {0, 1, 2}) {
-    const SimRun run = Simulate(corner, 40, 10 + corner);
-    Localizer localizer(SceneMap(testing::LoopWorld()));
-    int first = -1;
-    for (std::size_t i = 0; i < run.scans.size(); ++i) {
-      const LocalizerReport report = localizer.Process(run.scans[i]);
-      if (report.localized && first < 0) first = static_cast<int>(i);
-      if (first >= 0) {
-        EXPECT_TRUE(report.localized) << "corner " << corner << " scan " << i;
-        EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05))
-            << "corner " << corner << " scan " << i;
+  for (const bool retry : {false, true}) {
+    LocalizerParams params;
+    params.search_retry = retry;
+    for (const int corner : {0, 1, 2}) {
+      const SimRun run = Simulate(corner, 40, 10 + corner);
+      Localizer localizer(SceneMap(testing::LoopWorld()), params);
+      int first = -1;
+      for (std::size_t i = 0; i < run.scans.size(); ++i) {
+        const LocalizerReport report = localizer.Process(run.scans[i]);
+        if (report.localized && first < 0) first = static_cast<int>(i);
+        if (first >= 0) {
+          EXPECT_TRUE(report.localized)
+              << "retry " << retry << " corner " << corner << " scan " << i;
+          EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05))
+              << "retry " << retry << " corner " << corner << " scan " << i;
+        }
       }
+      EXPECT_GE(first, 0) << "retry " << retry << " corner " << corner;
+      EXPECT_LT(first, 5) << "retry " << retry << " corner " << corner;
     }
-    EXPECT_GE(first, 0) << "corner " << corner;
-    EXPECT_LT(first, 5) << "corner " << corner;
   }
 }
 
@@ -145,30 +151,36 @@ SimRun Kidnapped(int after_scans) {
   return run;
 }
 
+// With and without the search's second attempts (search_retry).
 TEST(LocalizerTest, NoticesAKidnappingAndRecovers) {
   const SimRun run = Kidnapped(50);
   const std::vector<LaserScan>& scans = run.scans;
   const std::vector<Pose2>& truth = run.truth;
-  Localizer localizer(SceneMap(testing::LoopWorld()));
-  localizer.SetInitialPose(truth[0]);
-  int lost_at = -1, recovered_at = -1;
-  for (std::size_t i = 0; i < scans.size(); ++i) {
-    const LocalizerReport report = localizer.Process(scans[i]);
-    if (i < kBeforeKidnapping) {
-      EXPECT_TRUE(report.localized) << "scan " << i;
-      EXPECT_FALSE(report.lost_event) << "scan " << i;
+  for (const bool retry : {false, true}) {
+    LocalizerParams params;
+    params.search_retry = retry;
+    Localizer localizer(SceneMap(testing::LoopWorld()), params);
+    localizer.SetInitialPose(truth[0]);
+    int lost_at = -1, recovered_at = -1;
+    for (std::size_t i = 0; i < scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(scans[i]);
+      if (i < kBeforeKidnapping) {
+        EXPECT_TRUE(report.localized) << "retry " << retry << " scan " << i;
+        EXPECT_FALSE(report.lost_event) << "retry " << retry << " scan " << i;
+      }
+      if (report.lost_event && lost_at < 0) lost_at = static_cast<int>(i);
+      if (report.recovered_event && recovered_at < 0) recovered_at = static_cast<int>(i);
+      if (recovered_at >= 0) {
+        EXPECT_THAT(report.T_map_robot, IsNearly(truth[i], 0.1, 0.05))
+            << "retry " << retry << " scan " << i;
+      }
     }
-    if (report.lost_event && lost_at < 0) lost_at = static_cast<int>(i);
-    if (report.recovered_event && recovered_at < 0) recovered_at = static_cast<int>(i);
-    if (recovered_at >= 0) {
-      EXPECT_THAT(report.T_map_robot, IsNearly(truth[i], 0.1, 0.05)) << "scan " << i;
-    }
+    const int kidnap = static_cast<int>(kBeforeKidnapping);
+    EXPECT_GE(lost_at, kidnap) << "retry " << retry;
+    EXPECT_LT(lost_at, kidnap + 5) << "retry " << retry;
+    EXPECT_GT(recovered_at, lost_at) << "retry " << retry;
+    EXPECT_LT(recovered_at, lost_at + 10) << "retry " << retry;
   }
-  const int kidnap = static_cast<int>(kBeforeKidnapping);
-  EXPECT_GE(lost_at, kidnap);
-  EXPECT_LT(lost_at, kidnap + 5);
-  EXPECT_GT(recovered_at, lost_at);
-  EXPECT_LT(recovered_at, lost_at + 10);
 }
 
 // The kidnapping above, with the loss detection off (as where the last matched scan carries the
