@@ -276,6 +276,7 @@ class Localizer {
     double depth_tolerance_m = 0.0;
     const ShapeSlamParams* stages = nullptr;  // in place of params_.stages (the field track's)
   };
+  TrackingAids SearchAids() const;
   Verified Track(const ScanShapes& shapes, const LaserScan& scan, const Hypothesis& hypothesis,
                  const std::optional<Pose2>& odometry_delta, int lost_scans, double min_fit,
                  const TrackingAids& aids) const;

@@ -259,9 +259,15 @@ std::vector<Point2> Localizer::GlobalSamples(const ScanShapes& shapes) const {
 // tight prediction, matched at min_fit or not.
 Localizer::Verified Localizer::Verify(const ScanShapes& shapes, const LaserScan& scan,
                                       const Pose2& T_map_sensor, double min_fit) const {
+  return VerifyRobot(shapes, scan, T_map_sensor * scan.T_robot_sensor.Inverse(), min_fit,
+                     SearchAids());
+}
+
+// The aids of a search's registrations: its stages (search_retry), nothing else.
+Localizer::TrackingAids Localizer::SearchAids() const {
   TrackingAids aids;
   aids.stages = &search_stages_;
-  return VerifyRobot(shapes, scan, T_map_sensor * scan.T_robot_sensor.Inverse(), min_fit, aids);
+  return aids;
 }
 
 // A robot pose verified as Verify does, with `aids` (the field track's: the recent scan, its
@@ -307,8 +313,7 @@ void Localizer::PropagateHypotheses(const ScanShapes& shapes, const LaserScan& s
     if (FieldTrackOn(odometry_delta) && h.misses == 0) {
       field = FieldTrack(shapes, scan, samples, h, params_.min_inlier_ratio, TrackingAids{});
     }
-    TrackingAids aids;
-    if (h.misses > 0) aids.stages = &search_stages_;
+    const TrackingAids aids = h.misses > 0 ? SearchAids() : TrackingAids{};
     const Verified v = field ? *field
                              : Track(shapes, scan, h, odometry_delta, h.misses,
                                      params_.min_inlier_ratio, aids);
