@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <tuple>
@@ -10,6 +12,7 @@
 #include "shape_slam/geometry.h"
 #include "shape_slam/evaluation.h"
 #include "shape_slam/candidate_selection.h"
+#include "shape_slam/internal/prepared_shape.h"
 
 namespace shape_slam {
 namespace {
@@ -106,7 +109,10 @@ class PairEvaluator {
         b_(static_cast<int>(input.model.size())),
         scan_groups_(static_cast<std::size_t>(a_) * g_),
         model_groups_(static_cast<std::size_t>(b_) * g_),
-        s_star_(static_cast<std::size_t>(a_) * g_ * b_ * g_) {}
+        scan_stages_(scan_groups_.size()),
+        model_shapes_(model_groups_.size()),
+        s_star_(static_cast<std::size_t>(a_) * g_ * b_ * g_,
+                std::numeric_limits<double>::quiet_NaN()) {}
 
   const Group& ScanGroup(int first, int count) {
     return Get(scan_groups_, input_.scan, first, count, true);
@@ -115,14 +121,21 @@ class PairEvaluator {
     return Get(model_groups_, input_.model, first, count, false);
   }
 
-  const EvolvedSimilarity& SStar(int i, int gs, int j, int gm) {
-    std::optional<EvolvedSimilarity>& slot =
-        s_star_[((static_cast<std::size_t>(i) * g_ + gs - 1) * b_ + j) * g_ + gm - 1];
-    if (!slot) {
-      slot = ComputeEvolvedSimilarity(ScanGroup(i, gs).points, ModelGroup(j, gm).points,
-                                      params_.similarity);
+  // S*(scan group, model group) of ComputeEvolvedSimilarity, each group prepared once
+  // (internal/prepared_shape.h): the scan group's DCE stages and the model group's arcs serve
+  // every pair they are in.
+  double SStar(int i, int gs, int j, int gm) {
+    double& slot = s_star_[((static_cast<std::size_t>(i) * g_ + gs - 1) * b_ + j) * g_ + gm - 1];
+    if (std::isnan(slot)) {
+      std::unique_ptr<internal::EvolutionStages>& stages =
+          scan_stages_[static_cast<std::size_t>(i) * g_ + gs - 1];
+      if (!stages) stages = std::make_unique<internal::EvolutionStages>(ScanGroup(i, gs).points);
+      std::unique_ptr<internal::PreparedShape>& model =
+          model_shapes_[static_cast<std::size_t>(j) * g_ + gm - 1];
+      if (!model) model = std::make_unique<internal::PreparedShape>(ModelGroup(j, gm).points);
+      slot = internal::EvolvedSimilarityValue(*stages, *model, params_.similarity, dp_);
     }
-    return *slot;
+    return slot;
   }
 
   // D of eq. (4) against an estimate, or nullopt when a gate rejects the pair.
@@ -178,7 +191,10 @@ class PairEvaluator {
   const ShapeMatcherParams& params_;
   int g_, a_, b_;
   std::vector<std::optional<Group>> scan_groups_, model_groups_;
-  std::vector<std::optional<EvolvedSimilarity>> s_star_;
+  std::vector<std::unique_ptr<internal::EvolutionStages>> scan_stages_;
+  std::vector<std::unique_ptr<internal::PreparedShape>> model_shapes_;
+  std::vector<double> s_star_;  // NaN: not computed yet
+  std::vector<double> dp_;      // the similarity DP's buffer
 };
 
 std::vector<double> SkipPenalties(const std::vector<Polyline>& polylines, double per_m) {
@@ -230,7 +246,7 @@ CorrespondenceSolution SolvePass(const ShapeMatchInput& input, const ShapeMatche
       if (!d) return std::nullopt;  // gated before paying for S*
       deviation = *d;
     }
-    return evaluator.SStar(i, gs, j, gm).value + deviation;
+    return evaluator.SStar(i, gs, j, gm) + deviation;
   };
   return SolveCorrespondence(problem);
 }
@@ -311,7 +327,7 @@ std::vector<Seed> MostReliablePairs(const ShapeMatchInput& input,
                                     const ShapeMatcherParams& params, PairEvaluator& evaluator) {
   std::vector<Seed> chosen, others;
   auto seed_of = [&](int i, int j) {
-    return Seed{i, j, Reliability(input.scan[i], input.model[j], evaluator.SStar(i, 1, j, 1).value)};
+    return Seed{i, j, Reliability(input.scan[i], input.model[j], evaluator.SStar(i, 1, j, 1))};
   };
   for (const GroupMatch& m : first_pass.matches) {
     if (m.scan_count == 1 && m.model_count == 1) chosen.push_back(seed_of(m.scan_first, m.model_first));

@@ -3,35 +3,18 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <stdexcept>
 
 #include "shape_slam/discrete_curve_evolution.h"
+#include "shape_slam/internal/prepared_shape.h"
 #include "shape_slam/tangent_space.h"
 
 namespace shape_slam {
 namespace {
 
-// The tangent space of a polyline in a form that compares any run of its segments without
-// allocating: cumulative lengths and unwrapped directions of the non-degenerate segments.
-struct SegmentTable {
-  std::vector<double> cumulative;  // size k + 1
-  std::vector<double> angle;       // size k
-  std::vector<int> first_segment;  // per vertex: index of the first segment after it
-
-  explicit SegmentTable(const Polyline& p) : first_segment(p.size(), 0) {
-    cumulative.push_back(0.0);
-    for (std::size_t i = 0; i + 1 < p.size(); ++i) {
-      first_segment[i] = static_cast<int>(angle.size());
-      const Point2 d = p[i + 1] - p[i];
-      const double length = d.norm();
-      if (length <= 0.0) continue;
-      const double direction = std::atan2(d.y(), d.x());
-      angle.push_back(angle.empty() ? direction : angle.back() + NormalizeAngle(direction - angle.back()));
-      cumulative.push_back(cumulative.back() + length);
-    }
-    if (!p.empty()) first_segment.back() = static_cast<int>(angle.size());
-  }
-};
+using internal::PreparedShape;
+using internal::SegmentTable;
 
 // A run of segments [begin, end) of a table.
 struct Run {
@@ -89,6 +72,48 @@ std::vector<Arc> ArcsForSimilarity(const Polyline& p) {
   return arcs;
 }
 
+// The DP of S(C, D) over the maximal arcs of both prepared polylines (PolylineSimilarity); the
+// correspondence into `matches` when given. `dp` is a reused buffer.
+double SimilarityDp(const PreparedShape& c, const PreparedShape& d, std::vector<double>& dp,
+                    std::vector<ArcGroupMatch>* matches) {
+  const SegmentTable& tc = c.table;
+  const SegmentTable& td = d.table;
+  const std::vector<Arc>& ac = c.arcs;
+  const std::vector<Arc>& ad = d.arcs;
+  const int m = static_cast<int>(ac.size()), n = static_cast<int>(ad.size());
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  dp.assign(static_cast<std::size_t>(m + 1) * (n + 1), kInf);
+  std::vector<ArcGroupMatch> step(matches != nullptr ? dp.size() : 0);
+  auto cell = [n](int i, int j) { return static_cast<std::size_t>(i) * (n + 1) + j; };
+  dp[0] = 0.0;
+  for (int i = 0; i < m; ++i) {
+    for (int j = 0; j < n; ++j) {
+      const double here = dp[cell(i, j)];
+      if (here == kInf) continue;
+      auto relax = [&](int ci, int cl, int di, int dl) {
+        const double cost = RunSimilarity(ArcRun(tc, ac, ci, cl), ArcRun(td, ad, di, dl));
+        double& target = dp[cell(cl + 1, dl + 1)];
+        if (here + cost < target) {
+          target = here + cost;
+          if (matches != nullptr) step[cell(cl + 1, dl + 1)] = {ci, cl, di, dl, cost};
+        }
+      };
+      for (int k = j; k < n; ++k) relax(i, i, j, k);      // 1-to-1 and 1-to-many
+      for (int k = i + 1; k < m; ++k) relax(i, k, j, j);  // many-to-1
+    }
+  }
+  if (matches != nullptr) {
+    for (int i = m, j = n; i > 0 && j > 0;) {
+      const ArcGroupMatch s = step[cell(i, j)];
+      matches->push_back(s);
+      i = s.c_first_arc;
+      j = s.d_first_arc;
+    }
+    std::reverse(matches->begin(), matches->end());
+  }
+  return dp[cell(m, n)];
+}
+
 }  // namespace
 
 void EvolvedSimilarityParams::Validate() const {
@@ -104,39 +129,9 @@ double ArcSimilarity(const Polyline& c, const Polyline& d) {
 
 SimilarityResult PolylineSimilarity(const Polyline& c, const Polyline& d) {
   CheckNotEmpty(c, d);
-  const SegmentTable tc(c), td(d);
-  const std::vector<Arc> ac = ArcsForSimilarity(c), ad = ArcsForSimilarity(d);
-  const int m = static_cast<int>(ac.size()), n = static_cast<int>(ad.size());
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  std::vector<double> dp(static_cast<std::size_t>(m + 1) * (n + 1), kInf);
-  std::vector<ArcGroupMatch> step(dp.size());
-  auto cell = [n](int i, int j) { return static_cast<std::size_t>(i) * (n + 1) + j; };
-  dp[0] = 0.0;
-  for (int i = 0; i < m; ++i) {
-    for (int j = 0; j < n; ++j) {
-      const double here = dp[cell(i, j)];
-      if (here == kInf) continue;
-      auto relax = [&](int ci, int cl, int di, int dl) {
-        const double cost = RunSimilarity(ArcRun(tc, ac, ci, cl), ArcRun(td, ad, di, dl));
-        double& target = dp[cell(cl + 1, dl + 1)];
-        if (here + cost < target) {
-          target = here + cost;
-          step[cell(cl + 1, dl + 1)] = {ci, cl, di, dl, cost};
-        }
-      };
-      for (int k = j; k < n; ++k) relax(i, i, j, k);      // 1-to-1 and 1-to-many
-      for (int k = i + 1; k < m; ++k) relax(i, k, j, j);  // many-to-1
-    }
-  }
   SimilarityResult result;
-  result.value = dp[cell(m, n)];
-  for (int i = m, j = n; i > 0 && j > 0;) {
-    const ArcGroupMatch s = step[cell(i, j)];
-    result.matches.push_back(s);
-    i = s.c_first_arc;
-    j = s.d_first_arc;
-  }
-  std::reverse(result.matches.begin(), result.matches.end());
+  std::vector<double> dp;
+  result.value = SimilarityDp(PreparedShape(c), PreparedShape(d), dp, &result.matches);
   return result;
 }
 
@@ -183,5 +178,69 @@ double ShapeComplexity(const Polyline& polyline) {
 double Reliability(const Polyline& p, const Polyline& q, double evolved_similarity) {
   return ShapeComplexity(p) + ShapeComplexity(q) - evolved_similarity;  // Eq. (5)
 }
+
+namespace internal {
+
+SegmentTable::SegmentTable(const Polyline& p) : first_segment(p.size(), 0) {
+  cumulative.push_back(0.0);
+  for (std::size_t i = 0; i + 1 < p.size(); ++i) {
+    first_segment[i] = static_cast<int>(angle.size());
+    const Point2 d = p[i + 1] - p[i];
+    const double length = d.norm();
+    if (length <= 0.0) continue;
+    const double direction = std::atan2(d.y(), d.x());
+    angle.push_back(angle.empty() ? direction : angle.back() + NormalizeAngle(direction - angle.back()));
+    cumulative.push_back(cumulative.back() + length);
+  }
+  if (!p.empty()) first_segment.back() = static_cast<int>(angle.size());
+}
+
+PreparedShape::PreparedShape(const Polyline& polyline)
+    : table(polyline), arcs(ArcsForSimilarity(polyline)) {}
+
+double SimilarityValue(const PreparedShape& c, const PreparedShape& d, std::vector<double>& dp) {
+  return SimilarityDp(c, d, dp, nullptr);
+}
+
+EvolutionStages::EvolutionStages(const Polyline& perceived) : evolution_(perceived) {
+  CheckNotEmpty(perceived, perceived);
+  stages_.push_back(std::make_unique<PreparedShape>(perceived));
+}
+
+const PreparedShape* EvolutionStages::Stage(int k) {
+  while (static_cast<int>(stages_.size()) <= k) {
+    if (!evolution_.CanRemove()) return nullptr;
+    evolution_.RemoveNext();
+    stages_.push_back(std::make_unique<PreparedShape>(evolution_.Current()));
+  }
+  return stages_[static_cast<std::size_t>(k)].get();
+}
+
+// The walk of ComputeEvolvedSimilarity over the stages: from the best stage so far, the next
+// `lookahead` stages in turn; the first that lowers S becomes the best, and the walk goes on
+// from there.
+double EvolvedSimilarityValue(EvolutionStages& perceived, const PreparedShape& model,
+                              const EvolvedSimilarityParams& params, std::vector<double>& dp) {
+  params.Validate();
+  double best = SimilarityValue(*perceived.Stage(0), model, dp);
+  int at = 0;
+  for (bool improved = true; improved;) {
+    improved = false;
+    for (int k = 1; k <= params.lookahead; ++k) {
+      const PreparedShape* stage = perceived.Stage(at + k);
+      if (stage == nullptr) break;
+      const double value = SimilarityValue(*stage, model, dp);
+      if (value < best) {
+        best = value;
+        at += k;
+        improved = true;
+        break;
+      }
+    }
+  }
+  return best;
+}
+
+}  // namespace internal
 
 }  // namespace shape_slam

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "shape_slam/discrete_curve_evolution.h"
+#include "shape_slam/internal/prepared_shape.h"
 #include "shape_slam/tangent_space.h"
 
 namespace shape_slam {
@@ -145,6 +146,41 @@ TEST(EvolvedSimilarityTest, LookaheadCrossesALocalMinimum) {
   }
   EXPECT_GT(differing, 10);
   EXPECT_THROW(ComputeEvolvedSimilarity(model, model, {0}), std::invalid_argument);
+}
+
+// The matcher's prepared path (internal/prepared_shape.h: each polyline's arcs and DCE stages
+// made once) gives S and S* to the bit, whatever the lookahead, and one prepared perceived
+// polyline serves several models in any order.
+TEST(EvolvedSimilarityTest, PreparedShapesGiveTheSameValuesToTheBit) {
+  std::mt19937 prng(11);
+  std::uniform_int_distribution<int> length(1, 18);
+  std::normal_distribution<double> step(0.0, 0.6), noise(0.0, 0.05);
+  const auto walk = [&](int n) {
+    Polyline p = {{0.0, 0.0}};
+    for (int i = 1; i < n; ++i) p.push_back(p.back() + Point2(0.5 + std::abs(step(prng)), step(prng)));
+    for (Point2& q : p) q += Point2(noise(prng), noise(prng));
+    return p;
+  };
+  std::vector<double> dp;
+  int evolved = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const Polyline perceived = walk(length(prng));
+    internal::EvolutionStages stages(perceived);
+    for (int m = 0; m < 3; ++m) {
+      const Polyline model = walk(length(prng));
+      const internal::PreparedShape prepared(model);
+      EXPECT_EQ(internal::SimilarityValue(*stages.Stage(0), prepared, dp),
+                PolylineSimilarity(perceived, model).value);
+      for (int lookahead : {1, 2, 3}) {
+        const EvolvedSimilarity expected = ComputeEvolvedSimilarity(perceived, model, {lookahead});
+        EXPECT_EQ(internal::EvolvedSimilarityValue(stages, prepared, {lookahead}, dp), expected.value)
+            << "trial " << trial << " model " << m << " lookahead " << lookahead;
+        evolved += expected.removed_vertices > 0 ? 1 : 0;
+      }
+    }
+  }
+  EXPECT_GT(evolved, 20);  // the walk over the stages was exercised
+  EXPECT_THROW(internal::EvolutionStages(Polyline{}), std::invalid_argument);
 }
 
 TEST(ShapeComplexityTest, HandValuesAndReliability) {
