@@ -60,8 +60,12 @@ struct Misfit {
   double overlap_m = 0.0;
 };
 
+// Stops early, with rms_m = +inf, once the sums alone put the RMS distance above max_rms_m or
+// the RMS angle above max_angle_rad whatever the samples left (at most all of them overlap):
+// the caller refuses such a pair either way. The 1e-6 margin keeps that certain under rounding.
 Misfit MeasureMisfit(const std::vector<DirectedSample>& samples_scan, double perceived_length_m,
-                     const Polyline& model, const Pose2& T_model_scan) {
+                     const Polyline& model, const Pose2& T_model_scan, double max_rms_m,
+                     double max_angle_rad) {
   Misfit misfit;
   if (samples_scan.empty() || model.size() < 2) return misfit;
   const PointTransform transform(T_model_scan);
@@ -69,6 +73,9 @@ Misfit MeasureMisfit(const std::vector<DirectedSample>& samples_scan, double per
   double sum_d2 = 0.0, sum_a2 = 0.0;
   int overlapping = 0;
   const std::size_t last_segment = model.size() - 2;
+  const double n = static_cast<double>(samples_scan.size()) * (1.0 + 1e-6);
+  const double max_sum_d2 = max_rms_m * max_rms_m * n;
+  const double max_sum_a2 = max_angle_rad * max_angle_rad * n;
   for (const DirectedSample& s : samples_scan) {
     const PolylineProjection proj = ProjectOntoPolyline(transform(s.point), model);
     const bool at_open_end = (proj.segment == 0 && proj.t <= 0.0) ||
@@ -81,6 +88,10 @@ Misfit MeasureMisfit(const std::vector<DirectedSample>& samples_scan, double per
     sum_d2 += proj.squared_distance;
     sum_a2 += angle * angle;
     ++overlapping;
+    if (sum_d2 > max_sum_d2 || sum_a2 > max_sum_a2) {
+      misfit.rms_m = std::numeric_limits<double>::infinity();
+      return misfit;
+    }
   }
   if (overlapping == 0) return misfit;
   misfit.rms_m = std::sqrt(sum_d2 / overlapping);
@@ -144,7 +155,8 @@ class PairEvaluator {
     const Group& scan = ScanGroup(i, gs);
     const Group& model = ModelGroup(j, gm);
     if (!BoxesMeet(scan, model, T_model_scan, max_misfit_m)) return std::nullopt;  // cheap first
-    const Misfit m = MeasureMisfit(scan.samples, scan.length_m, model.points, T_model_scan);
+    const Misfit m = MeasureMisfit(scan.samples, scan.length_m, model.points, T_model_scan,
+                                   max_misfit_m, params_.max_angle_rad);
     const double shorter = std::min(scan.length_m, model.length_m);
     if (m.overlap_m <= 0.0 || m.overlap_m < params_.min_overlap_fraction * shorter ||
         m.rms_m > max_misfit_m || m.angle_rms_rad > params_.max_angle_rad) {
