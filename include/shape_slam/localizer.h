@@ -64,7 +64,7 @@ struct LocalizerParams {
   double global_max_step_range_m = 8.0;
   /// Bound on the global search's work: search nodes scored (each costs one look-up per
   /// sample), which bounds its time (the search alone 20-36 ms on infinite-corridor, the largest
-  /// development map; a searching scan, with the verification and the hypotheses, at most 159 ms
+  /// development map; a searching scan, with the verification and the hypotheses, at most 151 ms
   /// in bench/results/localize).
   int global_node_evaluations = 300000;
   /// At most this many poses of the global search (best fit first, distinct) are verified.
