@@ -139,29 +139,13 @@ EvolvedSimilarity ComputeEvolvedSimilarity(const Polyline& perceived, const Poly
                                            const EvolvedSimilarityParams& params) {
   params.Validate();
   CheckNotEmpty(perceived, model);
+  internal::EvolutionStages stages(perceived);
+  std::vector<double> dp;
   EvolvedSimilarity best;
-  best.best = PolylineSimilarity(perceived, model);
-  best.value = best.best.value;
-  best.evolved_c = perceived;
-  CurveEvolution evolution(perceived);
-  for (bool improved = true; improved;) {
-    improved = false;
-    CurveEvolution trial = evolution;
-    for (int k = 1; k <= params.lookahead && trial.CanRemove(); ++k) {
-      trial.RemoveNext();
-      const Polyline candidate = trial.Current();
-      SimilarityResult s = PolylineSimilarity(candidate, model);
-      if (s.value < best.value) {
-        best.value = s.value;
-        best.best = std::move(s);
-        best.evolved_c = candidate;
-        best.removed_vertices += k;
-        evolution = trial;
-        improved = true;
-        break;
-      }
-    }
-  }
+  best.removed_vertices =
+      internal::BestEvolutionStage(stages, PreparedShape(model), params, dp, best.value);
+  best.evolved_c = stages.Points(best.removed_vertices);
+  best.best = PolylineSimilarity(best.evolved_c, model);  // its value is best.value
   return best;
 }
 
@@ -204,41 +188,54 @@ double SimilarityValue(const PreparedShape& c, const PreparedShape& d, std::vect
 
 EvolutionStages::EvolutionStages(const Polyline& perceived) : evolution_(perceived) {
   CheckNotEmpty(perceived, perceived);
-  stages_.push_back(std::make_unique<PreparedShape>(perceived));
+  stages_.push_back(std::make_unique<Stage_>(Stage_{perceived, PreparedShape(perceived)}));
 }
 
 const PreparedShape* EvolutionStages::Stage(int k) {
   while (static_cast<int>(stages_.size()) <= k) {
     if (!evolution_.CanRemove()) return nullptr;
     evolution_.RemoveNext();
-    stages_.push_back(std::make_unique<PreparedShape>(evolution_.Current()));
+    Polyline points = evolution_.Current();
+    PreparedShape prepared(points);
+    stages_.push_back(std::make_unique<Stage_>(Stage_{std::move(points), std::move(prepared)}));
   }
-  return stages_[static_cast<std::size_t>(k)].get();
+  return &stages_[static_cast<std::size_t>(k)]->shape;
 }
 
-// The walk of ComputeEvolvedSimilarity over the stages: from the best stage so far, the next
-// `lookahead` stages in turn; the first that lowers S becomes the best, and the walk goes on
-// from there.
-double EvolvedSimilarityValue(EvolutionStages& perceived, const PreparedShape& model,
-                              const EvolvedSimilarityParams& params, std::vector<double>& dp) {
+const Polyline& EvolutionStages::Points(int k) const {
+  return stages_.at(static_cast<std::size_t>(k))->points;
+}
+
+// S*'s walk over the stages (§4.1): from the best stage so far, the next `lookahead` stages in
+// turn; the first that lowers S becomes the best, and the walk goes on from there.
+int BestEvolutionStage(EvolutionStages& perceived, const PreparedShape& model,
+                       const EvolvedSimilarityParams& params, std::vector<double>& dp,
+                       double& value) {
   params.Validate();
-  double best = SimilarityValue(*perceived.Stage(0), model, dp);
+  value = SimilarityValue(*perceived.Stage(0), model, dp);
   int at = 0;
   for (bool improved = true; improved;) {
     improved = false;
     for (int k = 1; k <= params.lookahead; ++k) {
       const PreparedShape* stage = perceived.Stage(at + k);
       if (stage == nullptr) break;
-      const double value = SimilarityValue(*stage, model, dp);
-      if (value < best) {
-        best = value;
+      const double v = SimilarityValue(*stage, model, dp);
+      if (v < value) {
+        value = v;
         at += k;
         improved = true;
         break;
       }
     }
   }
-  return best;
+  return at;
+}
+
+double EvolvedSimilarityValue(EvolutionStages& perceived, const PreparedShape& model,
+                              const EvolvedSimilarityParams& params, std::vector<double>& dp) {
+  double value = 0.0;
+  BestEvolutionStage(perceived, model, params, dp, value);
+  return value;
 }
 
 }  // namespace internal

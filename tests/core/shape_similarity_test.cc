@@ -148,9 +148,38 @@ TEST(EvolvedSimilarityTest, LookaheadCrossesALocalMinimum) {
   EXPECT_THROW(ComputeEvolvedSimilarity(model, model, {0}), std::invalid_argument);
 }
 
+// S* as §4.1 states it, the evolution copied and continued for each lookahead: the reference the
+// prepared stages' walk is checked against.
+EvolvedSimilarity ReferenceEvolvedSimilarity(const Polyline& perceived, const Polyline& model,
+                                             int lookahead) {
+  EvolvedSimilarity best;
+  best.value = PolylineSimilarity(perceived, model).value;
+  best.evolved_c = perceived;
+  CurveEvolution evolution(perceived);
+  for (bool improved = true; improved;) {
+    improved = false;
+    CurveEvolution trial = evolution;
+    for (int k = 1; k <= lookahead && trial.CanRemove(); ++k) {
+      trial.RemoveNext();
+      const Polyline candidate = trial.Current();
+      const double value = PolylineSimilarity(candidate, model).value;
+      if (value < best.value) {
+        best.value = value;
+        best.evolved_c = candidate;
+        best.removed_vertices += k;
+        evolution = trial;
+        improved = true;
+        break;
+      }
+    }
+  }
+  return best;
+}
+
 // The matcher's prepared path (internal/prepared_shape.h: each polyline's arcs and DCE stages
-// made once) gives S and S* to the bit, whatever the lookahead, and one prepared perceived
-// polyline serves several models in any order.
+// made once), which ComputeEvolvedSimilarity walks too, gives S and S* of the reference to the
+// bit, whatever the lookahead, and one prepared perceived polyline serves several models in any
+// order.
 TEST(EvolvedSimilarityTest, PreparedShapesGiveTheSameValuesToTheBit) {
   std::mt19937 prng(11);
   std::uniform_int_distribution<int> length(1, 18);
@@ -175,6 +204,11 @@ TEST(EvolvedSimilarityTest, PreparedShapesGiveTheSameValuesToTheBit) {
         const EvolvedSimilarity expected = ComputeEvolvedSimilarity(perceived, model, {lookahead});
         EXPECT_EQ(internal::EvolvedSimilarityValue(stages, prepared, {lookahead}, dp), expected.value)
             << "trial " << trial << " model " << m << " lookahead " << lookahead;
+        const EvolvedSimilarity reference = ReferenceEvolvedSimilarity(perceived, model, lookahead);
+        EXPECT_EQ(expected.value, reference.value);
+        EXPECT_EQ(expected.removed_vertices, reference.removed_vertices);
+        EXPECT_EQ(expected.evolved_c, reference.evolved_c);
+        EXPECT_EQ(expected.best.value, expected.value);
         evolved += expected.removed_vertices > 0 ? 1 : 0;
       }
     }

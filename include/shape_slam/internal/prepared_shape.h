@@ -49,11 +49,23 @@ class EvolutionStages {
 
   /// Stage k, or nullptr when the evolution ends before it.
   const PreparedShape* Stage(int k);
+  /// The vertices of a stage already prepared (Stage(k) returned it).
+  const Polyline& Points(int k) const;
 
  private:
+  struct Stage_ {
+    Polyline points;
+    PreparedShape shape;
+  };
   CurveEvolution evolution_;  // at the last prepared stage
-  std::vector<std::unique_ptr<PreparedShape>> stages_;
+  std::vector<std::unique_ptr<Stage_>> stages_;
 };
+
+/// S*'s walk (§4.1, ComputeEvolvedSimilarity walks the same): the stage (= vertices removed) at
+/// which S(C, D) is lowest, and that S in `value`.
+int BestEvolutionStage(EvolutionStages& perceived, const PreparedShape& model,
+                       const EvolvedSimilarityParams& params, std::vector<double>& dp,
+                       double& value);
 
 /// S*(C, D).value of ComputeEvolvedSimilarity, walking `perceived`'s stages.
 double EvolvedSimilarityValue(EvolutionStages& perceived, const PreparedShape& model,
