@@ -127,6 +127,14 @@ struct LoopClosureParams {
   /// the verification accepted fitted less than 0.52 before refinement.
   double refine_min_fit = 0.45;
   int confirm_within_keyframes = 10;
+  /// A pending closure that asks for more than max_correction_m (the graph drifted; it could
+  /// never be taken alone) may also be confirmed later, up to confirm_near_keyframes after it,
+  /// by a closure that asks for more than max_correction_m too and whose new keyframe lies
+  /// within confirm_near_m of its own (graph poses): the same visit of the same spot, however
+  /// many keyframes the robot spent wandering there (a robot turning on the spot makes a
+  /// keyframe at every turn). 0 switches it off.
+  double confirm_near_m = 3.0;
+  int confirm_near_keyframes = 40;
   /// Two closures are consistent when the cycle they form through the graph (old keyframe ->
   /// loop -> new keyframe -> graph -> other new keyframe -> loop -> other old keyframe -> graph
   /// -> first old keyframe) closes within confirm_tolerance_m (+ confirm_tolerance_per_m per
@@ -252,6 +260,12 @@ class LoopCloser {
                   const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
 
  private:
+  /// Whether a closure asks for more than max_correction_m (and confirm_near_m is on).
+  bool AsksLargeCorrection(const LoopClosure& closure) const;
+  /// Whether a later closure may confirm a pending one: found within confirm_within_keyframes
+  /// of it, or near it (confirm_near_m).
+  bool MayConfirm(const LoopClosure& pending, const LoopClosure& later,
+                  const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
   std::vector<double> GraphDistances(const std::vector<LoopKeyframe>& keyframes,
                                      const PoseGraph& graph, int from) const;
   std::vector<int> CandidatesAt(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,

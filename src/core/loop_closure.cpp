@@ -158,6 +158,10 @@ void LoopClosureParams::Validate() const {
   if (confirm_within_keyframes < 1) {
     throw std::invalid_argument("LoopClosureParams::confirm_within_keyframes must be >= 1");
   }
+  NonNegative(confirm_near_m, "LoopClosureParams::confirm_near_m");
+  if (confirm_near_keyframes < 1) {
+    throw std::invalid_argument("LoopClosureParams::confirm_near_keyframes must be >= 1");
+  }
   NonNegative(confirm_tolerance_m, "LoopClosureParams::confirm_tolerance_m");
   NonNegative(confirm_tolerance_rad, "LoopClosureParams::confirm_tolerance_rad");
   NonNegative(confirm_tolerance_per_m, "LoopClosureParams::confirm_tolerance_per_m");
@@ -475,6 +479,23 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
 // The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the
 // graph puts ob relative to oa. The two chains along the graph (oa..ob, ka..kb) carry the
 // drift, so the tolerance grows with their length.
+bool LoopCloser::AsksLargeCorrection(const LoopClosure& closure) const {
+  return params_.confirm_near_m > 0.0 &&
+         closure.correction.Translation().norm() > params_.max_correction_m;
+}
+
+// Within confirm_within_keyframes of each other; or, both asking a large correction, new
+// keyframes within confirm_near_m of each other (LoopClosureParams::confirm_near_m).
+bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later,
+                            const std::vector<LoopKeyframe>& keyframes,
+                            const PoseGraph& graph) const {
+  if (later.new_keyframe - pending.new_keyframe <= params_.confirm_within_keyframes) return true;
+  if (!AsksLargeCorrection(pending) || !AsksLargeCorrection(later)) return false;
+  const Point2 a = graph.Node(keyframes[pending.new_keyframe].node).Translation();
+  const Point2 b = graph.Node(keyframes[later.new_keyframe].node).Translation();
+  return (a - b).norm() <= params_.confirm_near_m;
+}
+
 bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
                             const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const {
   const auto node = [&](int k) { return graph.Node(keyframes[k].node); };
@@ -564,7 +585,10 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
   ++num_searches_;
   pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
                                 [&](const LoopClosure& p) {
-                                  return current - p.new_keyframe > params_.confirm_within_keyframes;
+                                  const int waited = current - p.new_keyframe;
+                                  return waited > params_.confirm_within_keyframes &&
+                                         (!AsksLargeCorrection(p) ||
+                                          waited > params_.confirm_near_keyframes);
                                 }),
                  pending_.end());
   std::optional<LoopClosure> loop = Search(keyframes, graph, current);
@@ -585,7 +609,9 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
   if (!strong) {
     // A single match must not bend the map: wait for one that agrees with it.
     for (const LoopClosure& p : pending_) {
-      if (Consistent(p, *loop, keyframes, graph)) accepted.push_back(p);
+      if (MayConfirm(p, *loop, keyframes, graph) && Consistent(p, *loop, keyframes, graph)) {
+        accepted.push_back(p);
+      }
     }
     if (accepted.empty()) {
       events_.push_back({*loop, LoopDecision::kPending});

@@ -192,6 +192,8 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "refine_min_fit", "candidates of the full search fitting the old place less than this are not refined (the verification needs min_inlier_ratio)", &p.loop_closure.refine_min_fit},
       {"loop_closure", "strong_inlier_ratio", "a closure explaining this fraction both ways and correcting within max_correction_m/rad is used at once", &p.loop_closure.strong_inlier_ratio},
       {"loop_closure", "confirm_within_keyframes", "any other correcting closure waits for a consistent one within this many keyframes ...", &p.loop_closure.confirm_within_keyframes},
+      {"loop_closure", "confirm_near_m", "... or, both asking more than max_correction_m, one whose new keyframe lies within this of its own (m; 0: off) ...", &p.loop_closure.confirm_near_m},
+      {"loop_closure", "confirm_near_keyframes", "... within this many keyframes", &p.loop_closure.confirm_near_keyframes},
       {"loop_closure", "confirm_tolerance_m", "... consistent: the cycle of the two through the graph closes within this (m) ...", &p.loop_closure.confirm_tolerance_m},
       {"loop_closure", "confirm_tolerance_per_m", "... plus this per metre of its graph chains ...", &p.loop_closure.confirm_tolerance_per_m},
       {"loop_closure", "confirm_tolerance_rad", "... and within this (rad) ...", &p.loop_closure.confirm_tolerance_rad},

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 
 #include "shape_slam/pipeline.h"
@@ -209,6 +210,31 @@ TEST(LoopClosureTest, EventsRecordEveryClosureAndItsFate) {
   EXPECT_STREQ(LoopDecisionName(LoopDecision::kRefused), "refused");
 }
 
+// confirm_near_m: closures that ask for large corrections confirm each other when their new
+// keyframes are near, however many keyframes apart. With the keyframe window at 1 no two
+// searches (every 4th keyframe, 4 m apart in this drive) could confirm each other, so the
+// drifted loop stays open, and so it does with the rule at 3.5 m; at 4.5 m the same searches
+// close it.
+TEST(LoopClosureTest, LargeCorrectionsNearEachOtherConfirmEachOther) {
+  ShapeSlamParams params;
+  params.loop_closure.confirm_within_keyframes = 1;
+  params.loop_closure.confirm_near_m = 0.0;
+  const Result open = CloseLoops(LargeLoopWorld(), LargeLoopDrive(), 2, params);
+  EXPECT_GT(open.rmse_after, 0.9 * open.rmse_before) << "closed without the rule";
+  params.loop_closure.confirm_near_m = 3.5;  // searches 4 m apart are not near
+  const Result apart = CloseLoops(LargeLoopWorld(), LargeLoopDrive(), 2, params);
+  EXPECT_GT(apart.rmse_after, 0.9 * apart.rmse_before) << "closed by closures 4 m apart";
+  params.loop_closure.confirm_near_m = 4.5;
+  const Result closed = CloseLoops(LargeLoopWorld(), LargeLoopDrive(), 2, params);
+  EXPECT_GE(closed.closures, 2);
+  EXPECT_LT(closed.rmse_after, 0.3 * closed.rmse_before);
+  ExpectLoopEdgesRight(closed);
+  const bool confirmed = std::any_of(closed.events.begin(), closed.events.end(), [](const LoopEvent& e) {
+    return e.decision == LoopDecision::kConfirmed;
+  });
+  EXPECT_TRUE(confirmed);
+}
+
 TEST(LoopClosureTest, MatchesThatPutTheKeyframeApartAreAmbiguous) {
   const std::vector<ImpliedPose> agree = {{Pose2(10.0, 2.0, 0.1), 0.95},
                                           {Pose2(10.3, 2.2, 0.12), 0.9},
@@ -299,15 +325,16 @@ TEST(LoopClosureTest, DoesNotJoinLookAlikeParallelCorridors) {
 
 TEST(LoopClosureTest, InvalidParametersAreRejected) {
   const ShapeSlamParams params;
-  LoopClosureParams bad = params.loop_closure;
-  bad.max_search_radius_m = bad.search_radius_m - 1.0;
-  EXPECT_THROW(LoopCloser(bad, ToScanMatchParams(params)), std::invalid_argument);
-  bad = params.loop_closure;
-  bad.submap_step_m = -1.0;
-  EXPECT_THROW(LoopCloser(bad, ToScanMatchParams(params)), std::invalid_argument);
-  bad = params.loop_closure;
-  bad.refine_min_fit = 1.5;
-  EXPECT_THROW(LoopCloser(bad, ToScanMatchParams(params)), std::invalid_argument);
+  const auto rejected = [&](const std::function<void(LoopClosureParams&)>& spoil) {
+    LoopClosureParams bad = params.loop_closure;
+    spoil(bad);
+    EXPECT_THROW(LoopCloser(bad, ToScanMatchParams(params)), std::invalid_argument);
+  };
+  rejected([](LoopClosureParams& p) { p.max_search_radius_m = p.search_radius_m - 1.0; });
+  rejected([](LoopClosureParams& p) { p.submap_step_m = -1.0; });
+  rejected([](LoopClosureParams& p) { p.refine_min_fit = 1.5; });
+  rejected([](LoopClosureParams& p) { p.confirm_near_m = -1.0; });
+  rejected([](LoopClosureParams& p) { p.confirm_near_keyframes = 0; });
 }
 
 }  // namespace
