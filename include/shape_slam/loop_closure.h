@@ -107,8 +107,8 @@ struct LoopClosureParams {
   double max_correction_rad_per_m = 0.003;
   /// A closure whose match explains at least this fraction both ways and that corrects the
   /// graph by at most max_correction_m and max_correction_rad is used at once; any other one
-  /// that would correct the graph waits (confirm_within_keyframes keyframes at most) for a
-  /// second closure that is consistent with it.
+  /// that would correct the graph waits (confirm_within_keyframes keyframes, or see
+  /// confirm_near_m) for a second closure that is consistent with it.
   double strong_inlier_ratio = 0.8;
   /// The quick check: when the new keyframe fits the old place at the graph's estimate (after
   /// the quick ICP and the refinement) by at least this fraction, and it passes the verification,

@@ -476,9 +476,6 @@ std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& 
   return FullMatch(*sides, graph);
 }
 
-// The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the
-// graph puts ob relative to oa. The two chains along the graph (oa..ob, ka..kb) carry the
-// drift, so the tolerance grows with their length.
 bool LoopCloser::AsksLargeCorrection(const LoopClosure& closure) const {
   return params_.confirm_near_m > 0.0 &&
          closure.correction.Translation().norm() > params_.max_correction_m;
@@ -496,6 +493,9 @@ bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later
   return (a - b).norm() <= params_.confirm_near_m;
 }
 
+// The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the
+// graph puts ob relative to oa. The two chains along the graph (oa..ob, ka..kb) carry the
+// drift, so the tolerance grows with their length.
 bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
                             const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const {
   const auto node = [&](int k) { return graph.Node(keyframes[k].node); };
