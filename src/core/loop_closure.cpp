@@ -585,10 +585,12 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
   ++num_searches_;
   pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
                                 [&](const LoopClosure& p) {
-                                  const int waited = current - p.new_keyframe;
-                                  return waited > params_.confirm_within_keyframes &&
-                                         (!AsksLargeCorrection(p) ||
-                                          waited > params_.confirm_near_keyframes);
+                                  const int window =
+                                      AsksLargeCorrection(p)
+                                          ? std::max(params_.confirm_within_keyframes,
+                                                     params_.confirm_near_keyframes)
+                                          : params_.confirm_within_keyframes;
+                                  return current - p.new_keyframe > window;
                                 }),
                  pending_.end());
   std::optional<LoopClosure> loop = Search(keyframes, graph, current);

@@ -144,7 +144,9 @@ EvolvedSimilarity ComputeEvolvedSimilarity(const Polyline& perceived, const Poly
   EvolvedSimilarity best;
   best.removed_vertices =
       internal::BestEvolutionStage(stages, PreparedShape(model), params, dp, best.value);
-  best.evolved_c = stages.Points(best.removed_vertices);
+  CurveEvolution evolution(perceived);  // the stages' evolution, replayed to the best one
+  for (int k = 0; k < best.removed_vertices; ++k) evolution.RemoveNext();
+  best.evolved_c = evolution.Current();
   best.best = PolylineSimilarity(best.evolved_c, model);  // its value is best.value
   return best;
 }
@@ -188,22 +190,16 @@ double SimilarityValue(const PreparedShape& c, const PreparedShape& d, std::vect
 
 EvolutionStages::EvolutionStages(const Polyline& perceived) : evolution_(perceived) {
   CheckNotEmpty(perceived, perceived);
-  stages_.push_back(std::make_unique<Stage_>(Stage_{perceived, PreparedShape(perceived)}));
+  stages_.push_back(std::make_unique<PreparedShape>(perceived));
 }
 
 const PreparedShape* EvolutionStages::Stage(int k) {
   while (static_cast<int>(stages_.size()) <= k) {
     if (!evolution_.CanRemove()) return nullptr;
     evolution_.RemoveNext();
-    Polyline points = evolution_.Current();
-    PreparedShape prepared(points);
-    stages_.push_back(std::make_unique<Stage_>(Stage_{std::move(points), std::move(prepared)}));
+    stages_.push_back(std::make_unique<PreparedShape>(evolution_.Current()));
   }
-  return &stages_[static_cast<std::size_t>(k)]->shape;
-}
-
-const Polyline& EvolutionStages::Points(int k) const {
-  return stages_.at(static_cast<std::size_t>(k))->points;
+  return stages_[static_cast<std::size_t>(k)].get();
 }
 
 // S*'s walk over the stages (§4.1): from the best stage so far, the next `lookahead` stages in

@@ -49,16 +49,10 @@ class EvolutionStages {
 
   /// Stage k, or nullptr when the evolution ends before it.
   const PreparedShape* Stage(int k);
-  /// The vertices of a stage already prepared (Stage(k) returned it).
-  const Polyline& Points(int k) const;
 
  private:
-  struct Stage_ {
-    Polyline points;
-    PreparedShape shape;
-  };
   CurveEvolution evolution_;  // at the last prepared stage
-  std::vector<std::unique_ptr<Stage_>> stages_;
+  std::vector<std::unique_ptr<PreparedShape>> stages_;
 };
 
 /// S*'s walk (§4.1, ComputeEvolvedSimilarity walks the same): the stage (= vertices removed) at
