@@ -255,7 +255,9 @@ class LoopCloser {
   std::optional<LoopClosure> Match(const std::vector<LoopKeyframe>& keyframes,
                                    const PoseGraph& graph, int old) const;
   /// Whether two closures agree (the cycle they form through the graph closes, see
-  /// confirm_tolerance_*).
+  /// confirm_tolerance_*). Never across a guessed step: where every chain of the cycle along
+  /// the graph crosses a keyframe only the motion model placed (guess_sigma_*), the cycle
+  /// checks nothing.
   bool Consistent(const LoopClosure& a, const LoopClosure& b,
                   const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
 
@@ -266,8 +268,10 @@ class LoopCloser {
   /// of it, or near it (confirm_near_m).
   bool MayConfirm(const LoopClosure& pending, const LoopClosure& later,
                   const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
+  /// Driving along the graph from keyframe `from` to each keyframe, a guessed step counting
+  /// guess_m more (LoopClosureParams::guess_graph_m, or more to find chains that avoid one).
   std::vector<double> GraphDistances(const std::vector<LoopKeyframe>& keyframes,
-                                     const PoseGraph& graph, int from) const;
+                                     const PoseGraph& graph, int from, double guess_m) const;
   std::vector<int> CandidatesAt(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
                                 const std::vector<double>& graph_distance) const;
   std::optional<LoopClosure> MatchAt(const std::vector<LoopKeyframe>& keyframes,

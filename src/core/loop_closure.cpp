@@ -235,8 +235,9 @@ double LoopCloser::CorrectionBoundRad(double graph_distance_m) const {
 // keyframe from it once the closed loops are taken into account, a proxy for the uncertainty of
 // their relative pose. Indexed by keyframe.
 std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& keyframes,
-                                               const PoseGraph& graph, int from) const {
-  const auto adjacency = Adjacency(keyframes, graph, params_.guess_graph_m);
+                                               const PoseGraph& graph, int from,
+                                               double guess_m) const {
+  const auto adjacency = Adjacency(keyframes, graph, guess_m);
   std::vector<double> node_distance(graph.NumNodes(), std::numeric_limits<double>::infinity());
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
@@ -271,7 +272,8 @@ std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyfram
                                         const PoseGraph& graph) const {
   if (keyframes.size() < 2) return {};
   return CandidatesAt(keyframes, graph,
-                      GraphDistances(keyframes, graph, static_cast<int>(keyframes.size()) - 1));
+                      GraphDistances(keyframes, graph, static_cast<int>(keyframes.size()) - 1,
+                                     params_.guess_graph_m));
 }
 
 std::vector<int> LoopCloser::CandidatesAt(const std::vector<LoopKeyframe>& keyframes,
@@ -317,7 +319,8 @@ std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& ke
                                              const PoseGraph& graph, int old) const {
   const int current = static_cast<int>(keyframes.size()) - 1;
   if (old < 0 || old >= current) return std::nullopt;
-  return MatchAt(keyframes, graph, old, GraphDistances(keyframes, graph, current)[old]);
+  return MatchAt(keyframes, graph, old,
+                 GraphDistances(keyframes, graph, current, params_.guess_graph_m)[old]);
 }
 
 // Both sides of a candidate match: the current keyframe's scan and the old place.
@@ -495,15 +498,25 @@ bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later
 
 // The cycle oa -> ka (loop a) -> kb (graph) -> ob (loop b, inverted) must return to where the
 // graph puts ob relative to oa. The two chains along the graph (oa..ob, ka..kb) carry the
-// drift, so the tolerance grows with their length.
+// drift, so the tolerance grows with their length. A chain that cannot avoid a guessed step
+// carries a motion nothing measured: the cycle then closes or not by chance (every 2nd scan
+// without odometry: look-alike pairs 5.0-7.5 m and 0.2-0.5 rad off passed a tolerance grown to
+// 8-13 m by the guessed steps' guess_graph_m).
 bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
                             const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const {
+  constexpr double kAvoidGuess = 1e9;  // a chain this long crosses a guessed step
+  if (GraphDistances(keyframes, graph, a.old_keyframe, kAvoidGuess)[b.old_keyframe] >= kAvoidGuess ||
+      GraphDistances(keyframes, graph, a.new_keyframe, kAvoidGuess)[b.new_keyframe] >= kAvoidGuess) {
+    return false;
+  }
   const auto node = [&](int k) { return graph.Node(keyframes[k].node); };
   const Pose2 T_oa_ob = node(a.old_keyframe).Inverse() * node(b.old_keyframe);
   const Pose2 T_ka_kb = node(a.new_keyframe).Inverse() * node(b.new_keyframe);
   const Pose2 error = T_oa_ob.Inverse() * a.edge.T_from_to * T_ka_kb * b.edge.T_from_to.Inverse();
-  const std::vector<double> from_old = GraphDistances(keyframes, graph, a.old_keyframe);
-  const std::vector<double> from_new = GraphDistances(keyframes, graph, a.new_keyframe);
+  const std::vector<double> from_old =
+      GraphDistances(keyframes, graph, a.old_keyframe, params_.guess_graph_m);
+  const std::vector<double> from_new =
+      GraphDistances(keyframes, graph, a.new_keyframe, params_.guess_graph_m);
   const double chains = from_old[b.old_keyframe] + from_new[b.new_keyframe];
   return error.Translation().norm() <= params_.confirm_tolerance_m + params_.confirm_tolerance_per_m * chains &&
          std::abs(error.theta) <= params_.confirm_tolerance_rad + params_.confirm_tolerance_rad_per_m * chains;
@@ -516,7 +529,8 @@ bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
 std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& keyframes,
                                               const PoseGraph& graph, int current) {
   std::optional<LoopClosure> loop;
-  const std::vector<double> graph_distance = GraphDistances(keyframes, graph, current);
+  const std::vector<double> graph_distance =
+      GraphDistances(keyframes, graph, current, params_.guess_graph_m);
   const std::vector<int> candidates = CandidatesAt(keyframes, graph, graph_distance);
   if (!candidates.empty()) round_robin_ += std::max(1, params_.max_candidates - 1);
   std::vector<std::unique_ptr<Sides>> sides;

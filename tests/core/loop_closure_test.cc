@@ -235,6 +235,44 @@ TEST(LoopClosureTest, LargeCorrectionsNearEachOtherConfirmEachOther) {
   EXPECT_TRUE(confirmed);
 }
 
+// Two closures of a revisit, 2 -> 12 and 3 -> 13, that agree exactly with a graph of keyframes
+// one metre apart: consistent, unless the step 12 -> 13 is one only the motion model guessed
+// (the cycle then crosses a motion nothing measured); a loop edge around that step restores it.
+TEST(LoopClosureTest, ClosuresConfirmEachOtherOnlyAcrossMeasuredSteps) {
+  const auto check = [](bool guessed, bool bypass) {
+    PoseGraph graph;
+    std::vector<LoopKeyframe> keyframes;
+    for (int k = 0; k < 16; ++k) {
+      // The second pass (10..15) runs back over the first, 0.5 m to the side.
+      const Pose2 pose = k < 10 ? Pose2(k, 0.0, 0.0) : Pose2(k - 10.0, 0.5, 0.0);
+      const int node = graph.AddNode(pose);
+      if (k > 0) {
+        PoseGraphEdge e;
+        e.from = node - 1;
+        e.to = node;
+        e.T_from_to = graph.Node(node - 1).Inverse() * pose;
+        e.guessed = guessed && k == 13;
+        graph.AddEdge(e);
+      }
+      keyframes.push_back({node, ScanShapes(), Pose2(), static_cast<double>(k)});
+    }
+    if (bypass) graph.AddEdge({11, 14, graph.Node(11).Inverse() * graph.Node(14),
+                               Eigen::Matrix3d::Identity(), true});
+    const auto closure = [&](int old, int now) {
+      LoopClosure c;
+      c.edge = {old, now, graph.Node(old).Inverse() * graph.Node(now), Eigen::Matrix3d::Identity(), true};
+      c.old_keyframe = old;
+      c.new_keyframe = now;
+      return c;
+    };
+    const LoopCloser closer(LoopClosureParams{}, ScanMatchParams{});
+    return closer.Consistent(closure(2, 12), closure(3, 13), keyframes, graph);
+  };
+  EXPECT_TRUE(check(/*guessed=*/false, /*bypass=*/false));
+  EXPECT_FALSE(check(/*guessed=*/true, /*bypass=*/false));
+  EXPECT_TRUE(check(/*guessed=*/true, /*bypass=*/true));
+}
+
 TEST(LoopClosureTest, MatchesThatPutTheKeyframeApartAreAmbiguous) {
   const std::vector<ImpliedPose> agree = {{Pose2(10.0, 2.0, 0.1), 0.95},
                                           {Pose2(10.3, 2.2, 0.12), 0.9},
