@@ -255,8 +255,8 @@ class LoopCloser {
   std::optional<LoopClosure> Match(const std::vector<LoopKeyframe>& keyframes,
                                    const PoseGraph& graph, int old) const;
   /// Whether two closures agree (the cycle they form through the graph closes, see
-  /// confirm_tolerance_*). Never across a guessed step: where every chain of the cycle along
-  /// the graph crosses a keyframe only the motion model placed (guess_sigma_*), the cycle
+  /// confirm_tolerance_*). Never across a guessed step: where either chain of the cycle along
+  /// the graph cannot avoid a keyframe only the motion model placed (guess_sigma_*), the cycle
   /// checks nothing.
   bool Consistent(const LoopClosure& a, const LoopClosure& b,
                   const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
