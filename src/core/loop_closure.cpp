@@ -504,20 +504,26 @@ bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later
 // 8-13 m by the guessed steps' guess_graph_m).
 bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
                             const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const {
+  const double chain_old =
+      GraphDistances(keyframes, graph, a.old_keyframe, params_.guess_graph_m)[b.old_keyframe];
+  const double chain_new =
+      GraphDistances(keyframes, graph, a.new_keyframe, params_.guess_graph_m)[b.new_keyframe];
+  // A chain shorter than guess_graph_m crosses no guessed step (each weighs that much); only a
+  // longer one is searched again with guessed steps all but closed.
   constexpr double kAvoidGuess = 1e9;  // a chain this long crosses a guessed step
-  if (GraphDistances(keyframes, graph, a.old_keyframe, kAvoidGuess)[b.old_keyframe] >= kAvoidGuess ||
-      GraphDistances(keyframes, graph, a.new_keyframe, kAvoidGuess)[b.new_keyframe] >= kAvoidGuess) {
+  const auto avoids_guess = [&](int from, int to, double chain) {
+    return chain < params_.guess_graph_m ||
+           GraphDistances(keyframes, graph, from, kAvoidGuess)[to] < kAvoidGuess;
+  };
+  if (!avoids_guess(a.old_keyframe, b.old_keyframe, chain_old) ||
+      !avoids_guess(a.new_keyframe, b.new_keyframe, chain_new)) {
     return false;
   }
   const auto node = [&](int k) { return graph.Node(keyframes[k].node); };
   const Pose2 T_oa_ob = node(a.old_keyframe).Inverse() * node(b.old_keyframe);
   const Pose2 T_ka_kb = node(a.new_keyframe).Inverse() * node(b.new_keyframe);
   const Pose2 error = T_oa_ob.Inverse() * a.edge.T_from_to * T_ka_kb * b.edge.T_from_to.Inverse();
-  const std::vector<double> from_old =
-      GraphDistances(keyframes, graph, a.old_keyframe, params_.guess_graph_m);
-  const std::vector<double> from_new =
-      GraphDistances(keyframes, graph, a.new_keyframe, params_.guess_graph_m);
-  const double chains = from_old[b.old_keyframe] + from_new[b.new_keyframe];
+  const double chains = chain_old + chain_new;
   return error.Translation().norm() <= params_.confirm_tolerance_m + params_.confirm_tolerance_per_m * chains &&
          std::abs(error.theta) <= params_.confirm_tolerance_rad + params_.confirm_tolerance_rad_per_m * chains;
 }
