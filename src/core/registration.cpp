@@ -100,4 +100,20 @@ RegistrationResult RegisterCandidates(
   return ToResult(candidate, refined, selector.Fit(samples, refined.T_map_scan));
 }
 
+double MedianShift(const std::vector<Point2>& samples, const Pose2& from, const Pose2& to) {
+  if (samples.empty()) return 0.0;
+  std::vector<double> shifts;
+  shifts.reserve(samples.size());
+  for (const Point2& p : samples) shifts.push_back((to * p - from * p).norm());
+  const auto middle = shifts.begin() + static_cast<std::ptrdiff_t>(shifts.size() / 2);
+  std::nth_element(shifts.begin(), middle, shifts.end());
+  return *middle;
+}
+
+bool RefinementStayedNear(const std::vector<Point2>& samples, const Pose2& start,
+                          const Pose2& refined, const RefinementParams& params) {
+  return MedianShift(samples, start, refined) <=
+         params.outer_iterations * params.max_correspondence_distance_m;
+}
+
 }  // namespace shape_slam::internal

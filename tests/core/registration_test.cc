@@ -184,6 +184,34 @@ TEST(RegistrationTest, ThinnedKeepsEveryKthSample) {
   EXPECT_EQ(internal::Thinned(samples, 0.1, 0.05).size(), samples.size());
 }
 
+TEST(RegistrationTest, MedianShiftIsTheMedianSampleMotion) {
+  const std::vector<Point2> samples = {Point2(1.0, 0.0), Point2(2.0, 0.0), Point2(4.0, 0.0)};
+  EXPECT_DOUBLE_EQ(internal::MedianShift(samples, Pose2(), Pose2(0.0, 0.3, 0.0)), 0.3);
+  // Turned by 90 deg about the origin, the samples move by sqrt(2) times their range.
+  EXPECT_NEAR(internal::MedianShift(samples, Pose2(), Pose2(0.0, 0.0, M_PI / 2)), 2.0 * std::sqrt(2.0),
+              1e-12);
+  EXPECT_EQ(internal::MedianShift({}, Pose2(), Pose2(5.0, 0.0, 1.0)), 0.0);
+}
+
+// A refinement may move the scan's median sample by at most outer_iterations times the gate (3 x
+// 0.3 m by default): a correction of centimetres and degrees stays, a turn of 75 deg (a corner
+// seen by a narrow scan) does not.
+TEST(RegistrationTest, RefinementThatJumpedDidNotStayNear) {
+  RefinementParams params;
+  params.outer_iterations = 3;
+  params.max_correspondence_distance_m = 0.3;
+  std::vector<Point2> samples;
+  for (double r = 1.0; r <= 6.0; r += 0.1) samples.emplace_back(r, 0.3 * r);
+  const Pose2 start(2.0, 1.0, 0.4);
+  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start, params));
+  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start * Pose2(0.05, -0.03, 0.05), params));
+  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start * Pose2(0.85, 0.0, 0.0), params));
+  EXPECT_FALSE(internal::RefinementStayedNear(samples, start, start * Pose2(0.95, 0.0, 0.0), params));
+  EXPECT_FALSE(internal::RefinementStayedNear(samples, start, start * Pose2(0.0, 0.0, 75.0 * M_PI / 180.0), params));
+  params.outer_iterations = 4;  // one more round may carry the scan one gate farther
+  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start * Pose2(0.95, 0.0, 0.0), params));
+}
+
 // A corridor: two parallel walls 2 m apart along x, seen by the scan over 5 m each.
 std::vector<Polyline> CorridorWalls(double x0, double x1) {
   return {{Point2(x0, -1.0), Point2(x1, -1.0)}, {Point2(x1, 1.0), Point2(x0, 1.0)}};

@@ -81,6 +81,21 @@ Eigen::Matrix3d WidenedAlongRidge(const std::vector<Point2>& samples, const Mode
                                   const Pose2& T_model_scan, const Eigen::Matrix3d& covariance,
                                   double max_shift_m, double fit_margin);
 
+/// How far the samples move between two poses of the scan: the median over the samples, metres
+/// (0 without samples).
+double MedianShift(const std::vector<Point2>& samples, const Pose2& from, const Pose2& to);
+
+/// Whether a refinement (alignment_refinement.h) from `start` stayed a refinement. Each of its
+/// outer rounds associates the samples within the gate (max_correspondence_distance_m), so a
+/// result that moved the scan's median sample farther than all rounds together could have
+/// (outer_iterations times the gate) did not follow its associations: with few of them, in a
+/// corner, the solver can turn the scan by tens of degrees. Measured on the mapper's
+/// scan-to-scan edges (ShapeSlam's consecutive keyframes; notebook, 2026-12-07): right
+/// corrections moved the median sample at most 0.32 m; the jumps, in corners of a 120-degree
+/// scan, 3.2 and 4.5 m (75 and 118 deg), each bending the whole map.
+bool RefinementStayedNear(const std::vector<Point2>& samples, const Pose2& start,
+                          const Pose2& refined, const RefinementParams& params);
+
 /// Fraction of the samples within the grid's radius of the model at an estimate.
 double InlierRatio(const std::vector<Point2>& samples, const SegmentGrid& grid,
                    const Pose2& T_model_scan);
