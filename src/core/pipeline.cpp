@@ -298,8 +298,6 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   const Pose2 estimate = prev.scan.T_robot_sensor.Inverse() * edge.T_from_to * scan.T_robot_sensor;
   const RefinementResult local =
       RefineAlignment(samples, prev_fine, estimate, std::nullopt, params_.refinement);
-  // The scan-to-scan refinement corrects the tracking's step; one that jumped away from it
-  // (RefinementStayedNear) leaves the step as tracked.
   // Along a corridor that the two views cannot place, the step is only as certain as the
   // prediction: with odometry it held the tracking there; without, the edge is widened, so
   // that a loop closure corrects a slide without bending the rest of the path.
@@ -308,6 +306,8 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   const internal::ModelIcp check(prev_fine, params_.matcher.inlier_distance_m,
                                  params_.matcher.inlier_distance_m,
                                  widen ? internal::RidgeOpenEndM(lc.ridge_max_shift_m) : 0.0);
+  // The scan-to-scan refinement corrects the tracking's step; one that jumped away from it
+  // (RefinementStayedNear) leaves the step as tracked.
   if (local.converged &&
       internal::RefinementStayedNear(samples, estimate, local.T_map_scan, params_.refinement) &&
       check.InlierRatio(samples, local.T_map_scan) >= params_.min_inlier_ratio) {

@@ -188,8 +188,8 @@ TEST(RegistrationTest, MedianShiftIsTheMedianSampleMotion) {
   const std::vector<Point2> samples = {Point2(1.0, 0.0), Point2(2.0, 0.0), Point2(4.0, 0.0)};
   EXPECT_DOUBLE_EQ(internal::MedianShift(samples, Pose2(), Pose2(0.0, 0.3, 0.0)), 0.3);
   // Turned by 90 deg about the origin, the samples move by sqrt(2) times their range.
-  EXPECT_NEAR(internal::MedianShift(samples, Pose2(), Pose2(0.0, 0.0, M_PI / 2)), 2.0 * std::sqrt(2.0),
-              1e-12);
+  const Pose2 quarter_turn(0.0, 0.0, M_PI / 2);
+  EXPECT_NEAR(internal::MedianShift(samples, Pose2(), quarter_turn), 2.0 * std::sqrt(2.0), 1e-12);
   EXPECT_EQ(internal::MedianShift({}, Pose2(), Pose2(5.0, 0.0, 1.0)), 0.0);
 }
 
@@ -203,13 +203,16 @@ TEST(RegistrationTest, RefinementThatJumpedDidNotStayNear) {
   std::vector<Point2> samples;
   for (double r = 1.0; r <= 6.0; r += 0.1) samples.emplace_back(r, 0.3 * r);
   const Pose2 start(2.0, 1.0, 0.4);
-  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start, params));
-  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start * Pose2(0.05, -0.03, 0.05), params));
-  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start * Pose2(0.85, 0.0, 0.0), params));
-  EXPECT_FALSE(internal::RefinementStayedNear(samples, start, start * Pose2(0.95, 0.0, 0.0), params));
-  EXPECT_FALSE(internal::RefinementStayedNear(samples, start, start * Pose2(0.0, 0.0, 75.0 * M_PI / 180.0), params));
+  const auto stayed = [&](const Pose2& correction) {
+    return internal::RefinementStayedNear(samples, start, start * correction, params);
+  };
+  EXPECT_TRUE(stayed(Pose2()));
+  EXPECT_TRUE(stayed(Pose2(0.05, -0.03, 0.05)));
+  EXPECT_TRUE(stayed(Pose2(0.85, 0.0, 0.0)));
+  EXPECT_FALSE(stayed(Pose2(0.95, 0.0, 0.0)));
+  EXPECT_FALSE(stayed(Pose2(0.0, 0.0, 75.0 * M_PI / 180.0)));
   params.outer_iterations = 4;  // one more round may carry the scan one gate farther
-  EXPECT_TRUE(internal::RefinementStayedNear(samples, start, start * Pose2(0.95, 0.0, 0.0), params));
+  EXPECT_TRUE(stayed(Pose2(0.95, 0.0, 0.0)));
 }
 
 // A corridor: two parallel walls 2 m apart along x, seen by the scan over 5 m each.

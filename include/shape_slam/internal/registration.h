@@ -91,8 +91,8 @@ double MedianShift(const std::vector<Point2>& samples, const Pose2& from, const 
 /// (outer_iterations times the gate) did not follow its associations: with few of them, in a
 /// corner, the solver can turn the scan by tens of degrees. Measured on the mapper's
 /// scan-to-scan edges (ShapeSlam's consecutive keyframes; notebook, 2026-12-07): right
-/// corrections moved the median sample at most 0.32 m; the jumps, in corners of a 120-degree
-/// scan, 3.2 and 4.5 m (75 and 118 deg), each bending the whole map.
+/// corrections moved the median sample at most 0.32 m; two jumps, in corners of a 120-degree
+/// scan, 3.2 m (75 deg, which then bent a whole map) and 4.5 m (118 deg).
 bool RefinementStayedNear(const std::vector<Point2>& samples, const Pose2& start,
                           const Pose2& refined, const RefinementParams& params);
 
