@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "shape_slam/geometry.h"
+#include "shape_slam/internal/median.h"
 #include "shape_slam/internal/model_segments.h"
 
 namespace shape_slam {
@@ -115,9 +116,7 @@ class RestrictedIcp {
   // 1.4826 * median of the used distances (reorders the distance buffer).
   double RobustSigma() {
     if (distances_.empty()) return 0.0;
-    auto mid = distances_.begin() + static_cast<std::ptrdiff_t>(distances_.size() / 2);
-    std::nth_element(distances_.begin(), mid, distances_.end());
-    return kMadToSigma * *mid;
+    return kMadToSigma * internal::MedianInPlace(distances_);
   }
 
   double Rms() const {

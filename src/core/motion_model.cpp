@@ -5,6 +5,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include "shape_slam/internal/median.h"
 #include "shape_slam/internal/validation.h"
 
 namespace shape_slam {
@@ -43,9 +44,7 @@ void ConstantVelocity::Add(const Pose2& T_prev_cur, bool confirmed) {
 double ConstantVelocity::UsualSpeed() const {
   if (confirmed_speeds_.size() < kMinSpeeds) return 0.0;
   std::vector<double> speeds(confirmed_speeds_.begin(), confirmed_speeds_.end());
-  const auto middle = speeds.begin() + static_cast<std::ptrdiff_t>(speeds.size() / 2);
-  std::nth_element(speeds.begin(), middle, speeds.end());
-  return *middle;
+  return internal::MedianInPlace(speeds);
 }
 
 // A turn of a scan or two dilutes the mean of the last motions; the robot then enters a

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "shape_slam/internal/median.h"
 #include "shape_slam/internal/validation.h"
 
 namespace shape_slam {
@@ -16,11 +17,7 @@ namespace {
 constexpr double kChi2Median1 = 0.454936;
 constexpr double kChi2Median2 = 1.386294;
 
-double Median(std::vector<double> values) {
-  const auto middle = values.begin() + values.size() / 2;
-  std::nth_element(values.begin(), middle, values.end());
-  return *middle;
-}
+double Median(std::vector<double> values) { return internal::MedianInPlace(values); }
 
 }  // namespace
 

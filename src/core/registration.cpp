@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "shape_slam/alignment.h"
+#include "shape_slam/internal/median.h"
 
 namespace shape_slam::internal {
 
@@ -105,9 +106,7 @@ double MedianShift(const std::vector<Point2>& samples, const Pose2& from, const 
   std::vector<double> shifts;
   shifts.reserve(samples.size());
   for (const Point2& p : samples) shifts.push_back((to * p - from * p).norm());
-  const auto middle = shifts.begin() + static_cast<std::ptrdiff_t>(shifts.size() / 2);
-  std::nth_element(shifts.begin(), middle, shifts.end());
-  return *middle;
+  return MedianInPlace(shifts);
 }
 
 bool RefinementStayedNear(const std::vector<Point2>& samples, const Pose2& start,
