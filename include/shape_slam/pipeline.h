@@ -181,8 +181,12 @@ struct ShapeSlamParams {
   /// moved the robot backwards, or stopped it, where the odometry drove on had found a place
   /// that looks alike: behind the robot the scan's new part meets map that is already there,
   /// and fits better than at the true pose (intel, every 2nd scan: 1.83 m ATE, 0.76 m with it;
-  /// docs/design.md, "Odometry as a prior"). A low value (-100) is off.
-  double odometry_override_min_along = 0.5;
+  /// docs/design.md, "Odometry as a prior"). Nor one that shortened the step to less than
+  /// 0.7 of it: at a corridor's open end the true pose sees past the map and a pose half a step
+  /// behind does not (intel with every 2nd beam: overrides to 0.38-0.41 of a 1 m step, where
+  /// the glitches and poor odometry the overrides are for kept 0.87-0.98 of it). A low value
+  /// (-100) is off.
+  double odometry_override_min_along = 0.7;
   double odometry_override_judged_step_m = 0.5;
   /// A scan whose odometry pose equals the last scan's while the robot's longest step of the
   /// last scans reached this (m) is matched as if without odometry (the motion model, §4.3):

@@ -510,6 +510,43 @@ TEST(PipelineTest, AMatchAgainstTheWheelsDirectionDoesNotOverrideTheOdometry) {
   EXPECT_GT(StepError(run, at, off), 0.5);
 }
 
+// A match that only shortens the wheels' step: every 8th scan (1.2 m apart, the odometry right),
+// one of them with the ranges of the full log's scan 0.6 m back, half a step. At the odometry's
+// pose the scan's far part meets the wall early and fits poorly; half a step back it fits, as
+// at a corridor's open end, where the true pose sees past the map and a pose behind it does not
+// (intel with every 2nd beam). Half the step along the wheels' direction is too short for an
+// override (odometry_override_min_along 0.7); at 0.5 the scan drags the pose back.
+TEST(PipelineTest, AMatchThatHalvesTheWheelsStepDoesNotOverrideTheOdometry) {
+  const SimRun full = Simulate(3);
+  SimRun run;
+  std::vector<std::size_t> index;  // of each kept scan in `full`
+  for (std::size_t i = 0; i < full.scans.size(); i += 8) {
+    run.scans.push_back(full.scans[i]);
+    run.truth.push_back(full.truth[i]);
+    index.push_back(i);
+  }
+  std::size_t at = 0;
+  for (std::size_t i = 9; i + 1 < run.scans.size() && at == 0; ++i) {
+    const Pose2 d = run.truth[i - 1].pose.Inverse() * run.truth[i].pose;
+    const Pose2 back = full.truth[index[i] - 4].pose.Inverse() * run.truth[i].pose;
+    if (std::abs(d.theta) < 1e-9 && std::abs(d.x - 1.2) < 0.05 && std::abs(back.theta) < 1e-9 &&
+        std::abs(back.x - 0.6) < 0.05) {
+      at = i;
+    }
+  }
+  ASSERT_GT(at, 0u);
+  run.scans[at].ranges_m = full.scans[index[at] - 4].ranges_m;
+  // Odometry trusted to 0.08 m over the step, so that the registration with its prior does not
+  // reach 0.6 m back by itself: only the check without the odometry does.
+  ShapeSlamParams params;
+  params.odometry_noise.sigma_xy_m = 0.02;
+  params.odometry_noise.sigma_xy_per_m = 0.05;
+  ShapeSlamParams half = params;
+  half.odometry_override_min_along = 0.5;
+  EXPECT_LT(StepError(run, at, params), 0.2);
+  EXPECT_GT(StepError(run, at, half), 0.4);
+}
+
 // Odometry that stalls: every 4th scan (0.6 m apart), and at every 7th of them from the 10th on
 // the odometry pose is that of the scan before (a message late); the next scan's is right
 // again. The stalled scans are matched without the odometry (stale_odometry_min_step_m) and
