@@ -125,6 +125,7 @@ std::vector<std::vector<std::pair<int, double>>> Adjacency(const std::vector<Loo
 
 void LoopClosureParams::Validate() const {
   if (search_every < 1) throw std::invalid_argument("LoopClosureParams::search_every must be >= 1");
+  if (final_searches < 0) throw std::invalid_argument("LoopClosureParams::final_searches must be >= 0");
   if (max_candidates < 1) throw std::invalid_argument("LoopClosureParams::max_candidates must be >= 1");
   NonNegative(submap_travel_m, "LoopClosureParams::submap_travel_m");
   NonNegative(submap_step_m, "LoopClosureParams::submap_step_m");
@@ -489,6 +490,8 @@ bool LoopCloser::AsksLargeCorrection(const LoopClosure& closure) const {
 bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later,
                             const std::vector<LoopKeyframe>& keyframes,
                             const PoseGraph& graph) const {
+  // The same keyframe searched twice (FinalUpdate) does not confirm itself.
+  if (later.new_keyframe == pending.new_keyframe) return false;
   if (later.new_keyframe - pending.new_keyframe <= params_.confirm_within_keyframes) return true;
   if (!AsksLargeCorrection(pending) || !AsksLargeCorrection(later)) return false;
   const Point2 a = graph.Node(keyframes[pending.new_keyframe].node).Translation();
@@ -602,6 +605,39 @@ bool LoopCloser::BreaksEarlierLoops(const PoseGraph& graph,
 bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
   const int current = static_cast<int>(keyframes.size()) - 1;
   if (!params_.enabled || current < 1 || current % params_.search_every != 0) return false;
+  return SearchAndDecide(keyframes, graph);
+}
+
+// Keyframes between the final searches (LoopClosureParams::final_searches).
+constexpr int kFinalSearchSpacing = 2;
+
+bool LoopCloser::FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
+  const int last = static_cast<int>(keyframes.size()) - 1;
+  if (!params_.enabled || params_.final_searches <= 0 || last < 1 || last == final_searched_) {
+    return false;
+  }
+  final_searched_ = last;
+  const double view = params_.max_view_angle_rad;
+  params_.max_view_angle_rad = M_PI;
+  bool moved = false;
+  // Earliest first, each as if it were the last keyframe: a closure found at one may then be
+  // confirmed by the next, as during the run.
+  for (int i = params_.final_searches - 1; i >= 0; --i) {
+    const int current = last - i * kFinalSearchSpacing;
+    if (current < 1) continue;
+    if (current == last) {
+      moved = SearchAndDecide(keyframes, graph) || moved;
+    } else {
+      const std::vector<LoopKeyframe> head(keyframes.begin(), keyframes.begin() + current + 1);
+      moved = SearchAndDecide(head, graph) || moved;
+    }
+  }
+  params_.max_view_angle_rad = view;
+  return moved;
+}
+
+bool LoopCloser::SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
+  const int current = static_cast<int>(keyframes.size()) - 1;
   ++num_searches_;
   pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
                                 [&](const LoopClosure& p) {

@@ -407,6 +407,7 @@ void ShapeSlam::Optimize() {
 }
 
 void ShapeSlam::Finish() {
+  loop_closer_.FinalUpdate(places_, graph_);
   const auto& edges = graph_.Edges();
   const bool has_loops =
       std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; });

@@ -97,9 +97,11 @@ struct Result {
 // Feeds the drive to a LoopCloser keyframe by keyframe, optimising whenever it asks and once
 // at the end, as the mapper does.
 // From keyframe `changed_from` on the scans see `changed` instead of `world` (when given).
+// `final_update`: the end-of-log searches too (LoopCloser::FinalUpdate, as ShapeSlam::Finish).
 Result CloseLoops(const Scene& world, const Drive& drive, unsigned seed,
                   const ShapeSlamParams& params = ShapeSlamParams(),
-                  const Scene* changed = nullptr, std::size_t changed_from = 0) {
+                  const Scene* changed = nullptr, std::size_t changed_from = 0,
+                  bool final_update = false) {
   LoopCloser closer(params.loop_closure, ToScanMatchParams(params));
   std::mt19937 prng(seed);
   std::vector<LoopKeyframe> keyframes;
@@ -120,6 +122,14 @@ Result CloseLoops(const Scene& world, const Drive& drive, unsigned seed,
     }
     keyframes.push_back({node, ExtractScanShapes(scan, params.shapes), Pose2(), travel});
     if (closer.Update(keyframes, r.graph)) r.graph.Optimize(params.loop_closure.graph);
+  }
+  if (final_update) {
+    const int searches = closer.NumSearches();
+    closer.FinalUpdate(keyframes, r.graph);
+    EXPECT_LE(closer.NumSearches() - searches, params.loop_closure.final_searches);
+    const int after = closer.NumSearches();
+    closer.FinalUpdate(keyframes, r.graph);  // once per last keyframe
+    EXPECT_EQ(closer.NumSearches(), after);
   }
   r.rmse_before = PositionRmse(drive.estimate, drive.truth);
   r.graph.Optimize(params.loop_closure.graph);
@@ -361,6 +371,37 @@ TEST(LoopClosureTest, DoesNotJoinLookAlikeParallelCorridors) {
   EXPECT_LT(r.rmse_after, 0.3) << "before " << r.rmse_before;
 }
 
+// The robot drives along the ring's first side, turns round and drives 14 m back: its last
+// keyframes look the other way from every earlier keyframe near them, so the searches during
+// the run find no candidate and the way back keeps its drift against the way out. The
+// end-of-log searches take candidates from every heading (final_searches) and lay the two
+// passes over each other.
+TEST(LoopClosureTest, TheLastKeyframesAreSearchedFromEveryHeading) {
+  const std::vector<Point2> path = {{1.5, 1.5}, {34.0, 1.5}, {20.0, 1.5}};
+  const Drive drive = DriveAlong(path, 1.0, 0.5 * M_PI / 180.0, 3);
+  // The last keyframe against the outbound keyframe at its place: the two passes overlaid.
+  const int last = static_cast<int>(drive.truth.size()) - 1;
+  int beside = 0;
+  for (int k = 0; k < last; ++k) {
+    const double d = (drive.truth[k].Translation() - drive.truth[last].Translation()).norm();
+    if (d < (drive.truth[beside].Translation() - drive.truth[last].Translation()).norm()) beside = k;
+  }
+  const Pose2 truth = drive.truth[beside].Inverse() * drive.truth[last];
+  const auto last_error = [&](const Result& r) {
+    const Pose2 estimate = r.graph.Node(beside).Inverse() * r.graph.Node(last);
+    return (estimate.Translation() - truth.Translation()).norm();
+  };
+  ShapeSlamParams off;
+  off.loop_closure.final_searches = 0;
+  const Result open = CloseLoops(LargeLoopWorld(), drive, 4, off, nullptr, 0, true);
+  const Result closed = CloseLoops(LargeLoopWorld(), drive, 4, ShapeSlamParams(), nullptr, 0, true);
+  EXPECT_EQ(open.closures, 0);
+  EXPECT_GT(last_error(open), 0.3);
+  EXPECT_GE(closed.closures, 1);
+  EXPECT_LT(last_error(closed), 0.5 * last_error(open));
+  ExpectLoopEdgesRight(closed);
+}
+
 TEST(LoopClosureTest, InvalidParametersAreRejected) {
   const ShapeSlamParams params;
   const auto rejected = [&](const std::function<void(LoopClosureParams&)>& spoil) {
@@ -373,6 +414,7 @@ TEST(LoopClosureTest, InvalidParametersAreRejected) {
   rejected([](LoopClosureParams& p) { p.refine_min_fit = 1.5; });
   rejected([](LoopClosureParams& p) { p.confirm_near_m = -1.0; });
   rejected([](LoopClosureParams& p) { p.confirm_near_keyframes = 0; });
+  rejected([](LoopClosureParams& p) { p.final_searches = -1; });
 }
 
 }  // namespace

@@ -102,15 +102,24 @@ TEST(PipelineTest, MapsTheLoopWithOdometry) {
 }
 
 // The final optimisation: the loop closes, Finish keeps the trajectory right and the map made
-// of the keyframes at their corrected poses; processing may go on after it.
+// of the keyframes at their corrected poses; processing may go on after it. Finish adds loop
+// edges only (the end-of-log searches, LoopClosureParams::final_searches), none without them.
 TEST(PipelineTest, FinishOptimisesAndRebuildsTheMap) {
   const SimRun run = Simulate(5);
+  ShapeSlamParams no_final;
+  no_final.loop_closure.final_searches = 0;
+  ShapeSlam without(no_final);
+  for (const LaserScan& scan : run.scans) without.Process(scan);
+  const std::size_t edges_without = without.Graph().Edges().size();
+  without.Finish();
+  EXPECT_EQ(without.Graph().Edges().size(), edges_without);
   ShapeSlam slam;
   for (const LaserScan& scan : run.scans) slam.Process(scan);
   ASSERT_GT(slam.NumLoopClosures(), 0);
   const std::size_t loops = slam.Graph().Edges().size();
   slam.Finish();
-  EXPECT_EQ(slam.Graph().Edges().size(), loops);  // no new edge, only optimised
+  const auto& edges = slam.Graph().Edges();
+  for (std::size_t e = loops; e < edges.size(); ++e) EXPECT_TRUE(edges[e].loop) << "edge " << e;
   EXPECT_LT(EvaluateTrajectory(slam.Trajectory(), run.truth, {}).ate_rmse_m, 0.05);
   EXPECT_GT(slam.Map().NumPolylines(), 5u);
   const ScanReport more = slam.Process(run.scans.back());
