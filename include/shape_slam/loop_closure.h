@@ -269,14 +269,15 @@ class LoopCloser {
   /// checks nothing.
   bool Consistent(const LoopClosure& a, const LoopClosure& b,
                   const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
+  /// Whether a later closure may confirm a pending one: from a later keyframe, within
+  /// confirm_within_keyframes of it or near it (confirm_near_m). `keyframes` reach both
+  /// (exposed for tests).
+  bool MayConfirm(const LoopClosure& pending, const LoopClosure& later,
+                  const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
 
  private:
   /// Whether a closure asks for more than max_correction_m (and confirm_near_m is on).
   bool AsksLargeCorrection(const LoopClosure& closure) const;
-  /// Whether a later closure may confirm a pending one: found within confirm_within_keyframes
-  /// of it, or near it (confirm_near_m).
-  bool MayConfirm(const LoopClosure& pending, const LoopClosure& later,
-                  const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const;
   /// Driving along the graph from keyframe `from` to each keyframe, a guessed step counting
   /// guess_m more (LoopClosureParams::guess_graph_m, or more to find chains that avoid one).
   std::vector<double> GraphDistances(const std::vector<LoopKeyframe>& keyframes,

@@ -490,8 +490,9 @@ bool LoopCloser::AsksLargeCorrection(const LoopClosure& closure) const {
 bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later,
                             const std::vector<LoopKeyframe>& keyframes,
                             const PoseGraph& graph) const {
-  // The same keyframe searched twice (FinalUpdate) does not confirm itself.
-  if (later.new_keyframe == pending.new_keyframe) return false;
+  // Only a later keyframe confirms: at the end of the log (FinalUpdate) a keyframe is searched
+  // again, and one before a pending closure's keyframe is searched after it.
+  if (later.new_keyframe <= pending.new_keyframe) return false;
   if (later.new_keyframe - pending.new_keyframe <= params_.confirm_within_keyframes) return true;
   if (!AsksLargeCorrection(pending) || !AsksLargeCorrection(later)) return false;
   const Point2 a = graph.Node(keyframes[pending.new_keyframe].node).Translation();

@@ -371,6 +371,27 @@ TEST(LoopClosureTest, DoesNotJoinLookAlikeParallelCorridors) {
   EXPECT_LT(r.rmse_after, 0.3) << "before " << r.rmse_before;
 }
 
+// Only a closure from a later keyframe confirms a pending one: not one from the same keyframe
+// searched again, nor one from an earlier keyframe searched after it (the end-of-log searches).
+TEST(LoopClosureTest, OnlyALaterKeyframeConfirms) {
+  PoseGraph graph;
+  std::vector<LoopKeyframe> keyframes;
+  for (int k = 0; k < 16; ++k) {
+    graph.AddNode(Pose2(k, 0.0, 0.0));
+    keyframes.push_back({k, ScanShapes(), Pose2(), static_cast<double>(k)});
+  }
+  const auto closure = [](int old, int now) {
+    LoopClosure c;
+    c.old_keyframe = old;
+    c.new_keyframe = now;
+    return c;
+  };
+  const LoopCloser closer(LoopClosureParams{}, ScanMatchParams{});
+  EXPECT_TRUE(closer.MayConfirm(closure(2, 12), closure(3, 14), keyframes, graph));
+  EXPECT_FALSE(closer.MayConfirm(closure(2, 12), closure(2, 12), keyframes, graph));
+  EXPECT_FALSE(closer.MayConfirm(closure(2, 12), closure(1, 10), keyframes, graph));
+}
+
 // The robot drives along the ring's first side, turns round and drives 14 m back: its last
 // keyframes look the other way from every earlier keyframe near them, so the searches during
 // the run find no candidate and the way back keeps its drift against the way out. The
