@@ -324,8 +324,10 @@ class ShapeSlam {
   /// localised by prediction and leaves the map unchanged).
   ScanReport Process(const LaserScan& scan);
 
-  /// At the end of the log: a final optimisation of the pose graph (when it holds loop edges).
-  /// Call it before writing the outputs; Process may still be called afterwards.
+  /// At the end of the log: the last keyframes searched for loops once more, from every heading
+  /// (LoopClosureParams::final_searches; once per last keyframe), then a final optimisation of
+  /// the pose graph (when it holds loop edges). Call it before writing the outputs; Process
+  /// may still be called afterwards.
   void Finish();
 
   /// The global map: the loaded map (if any) and every keyframe merged into it (§5.2) at its

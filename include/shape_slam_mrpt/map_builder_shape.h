@@ -126,7 +126,7 @@ class CMetricMapBuilderShape : public mrpt::slam::CMetricMapBuilder {
   /// The localizer's report of the last scan, in localization mode.
   const std::optional<LocalizerReport>& LastLocalizerReport() const { return last_localizer_report_; }
 
-  /// At the end of the log: the mapper's final pose-graph optimisation
+  /// At the end of the log: the mapper's final loop searches and pose-graph optimisation
   /// (ShapeSlam::Finish). Call it before saving the map; processing may go on afterwards.
   void Finish();
 
