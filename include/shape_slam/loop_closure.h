@@ -278,26 +278,34 @@ class LoopCloser {
  private:
   /// Whether a closure asks for more than max_correction_m (and confirm_near_m is on).
   bool AsksLargeCorrection(const LoopClosure& closure) const;
-  /// Driving along the graph from keyframe `from` to each keyframe, a guessed step counting
-  /// guess_m more (LoopClosureParams::guess_graph_m, or more to find chains that avoid one).
+  // The search path takes the keyframe searched, `current`, and sees only keyframes 0..current:
+  // FinalUpdate searches earlier keyframes as if each were the last.
+
+  /// Driving along the graph from keyframe `from` to each keyframe up to `current`, a guessed
+  /// step counting guess_m more (LoopClosureParams::guess_graph_m, or more to find chains that
+  /// avoid one).
   std::vector<double> GraphDistances(const std::vector<LoopKeyframe>& keyframes,
-                                     const PoseGraph& graph, int from, double guess_m) const;
+                                     const PoseGraph& graph, int from, double guess_m,
+                                     int current) const;
+  /// Candidates of keyframe `current`, seen within max_view_angle_rad (plus view_angle_per_m).
   std::vector<int> CandidatesAt(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
-                                const std::vector<double>& graph_distance) const;
-  std::optional<LoopClosure> MatchAt(const std::vector<LoopKeyframe>& keyframes,
-                                     const PoseGraph& graph, int old, double graph_distance) const;
+                                const std::vector<double>& graph_distance, int current,
+                                double max_view_angle_rad) const;
+  bool ConsistentAt(const LoopClosure& a, const LoopClosure& b,
+                    const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
+                    int current) const;
   struct Sides;  // both sides of a candidate match (loop_closure.cpp)
-  /// Both sides of a match of the last keyframe against the place around `old`; null when
+  /// Both sides of a match of keyframe `current` against the place around `old`; null when
   /// either has nothing to match.
   std::unique_ptr<Sides> MakeSides(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
-                                   int old, double graph_distance) const;
+                                   int old, int current, double graph_distance) const;
   /// The quick check at the graph's estimate (quick_min_fit) and the full search (window search,
   /// shape matching, selection); each returns the verified closure or nullopt.
   std::optional<LoopClosure> QuickMatch(const Sides& sides, const PoseGraph& graph) const;
   std::optional<LoopClosure> FullMatch(const Sides& sides, const PoseGraph& graph) const;
-  // The best match of the current keyframe among the candidates (quick checks first).
+  // The best match of keyframe `current` among the candidates (quick checks first).
   std::optional<LoopClosure> Search(const std::vector<LoopKeyframe>& keyframes,
-                                    const PoseGraph& graph, int current);
+                                    const PoseGraph& graph, int current, double max_view_angle_rad);
   // Whether the graph optimised with `accepted` breaks too many earlier loop edges.
   bool BreaksEarlierLoops(const PoseGraph& graph, const std::vector<LoopClosure>& accepted) const;
   /// The refinement of one candidate against the place; nullopt unless it converged.
@@ -310,8 +318,10 @@ class LoopCloser {
   double CorrectionBoundM(double graph_distance_m) const;
   double CorrectionBoundRad(double graph_distance_m) const;
 
-  // Update's search and decision at the last keyframe.
-  bool SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph);
+  // The search and decision at keyframe `current` (Update: the last; FinalUpdate: the last ones,
+  // from every heading).
+  bool SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph, int current,
+                       double max_view_angle_rad);
 
   LoopClosureParams params_;
   ScanMatchParams match_;

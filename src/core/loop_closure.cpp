@@ -39,8 +39,7 @@ struct Place {
 };
 
 Place OldPlace(const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph, int old,
-               const LoopClosureParams& p) {
-  const int current = static_cast<int>(keyframes.size()) - 1;
+               int current, const LoopClosureParams& p) {
   Place place;
   place.coarse = keyframes[old].shapes.coarse;
   const Pose2 T_old_map = SensorPose(keyframes, graph, old).Inverse();
@@ -106,11 +105,13 @@ std::optional<Pose2> ShapeCandidate(const ScanShapes& scan, const std::vector<Po
 
 // Weighted adjacency of the pose graph: consecutive edges weigh the driving between their
 // keyframes (plus guess_m for a guessed step), loop edges nothing (they tie the two places
-// together).
+// together). Keyframes after `current` are not known: the nodes they own are placed at no
+// driving (as when they did not exist yet).
 std::vector<std::vector<std::pair<int, double>>> Adjacency(const std::vector<LoopKeyframe>& keyframes,
-                                                           const PoseGraph& graph, double guess_m) {
+                                                           const PoseGraph& graph, double guess_m,
+                                                           int current) {
   std::vector<double> travel(graph.NumNodes(), 0.0);
-  for (const LoopKeyframe& kf : keyframes) travel.at(kf.node) = kf.travel_m;
+  for (int k = 0; k <= current; ++k) travel.at(keyframes[k].node) = keyframes[k].travel_m;
   std::vector<std::vector<std::pair<int, double>>> adjacency(graph.NumNodes());
   for (const PoseGraphEdge& e : graph.Edges()) {
     const double w =
@@ -236,9 +237,9 @@ double LoopCloser::CorrectionBoundRad(double graph_distance_m) const {
 // keyframe from it once the closed loops are taken into account, a proxy for the uncertainty of
 // their relative pose. Indexed by keyframe.
 std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& keyframes,
-                                               const PoseGraph& graph, int from,
-                                               double guess_m) const {
-  const auto adjacency = Adjacency(keyframes, graph, guess_m);
+                                               const PoseGraph& graph, int from, double guess_m,
+                                               int current) const {
+  const auto adjacency = Adjacency(keyframes, graph, guess_m, current);
   std::vector<double> node_distance(graph.NumNodes(), std::numeric_limits<double>::infinity());
   using Item = std::pair<double, int>;
   std::priority_queue<Item, std::vector<Item>, std::greater<Item>> queue;
@@ -255,8 +256,8 @@ std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& 
       }
     }
   }
-  std::vector<double> distance(keyframes.size());
-  for (std::size_t k = 0; k < keyframes.size(); ++k) {
+  std::vector<double> distance(current + 1);
+  for (int k = 0; k <= current; ++k) {
     const double d = node_distance[keyframes[k].node];
     // A keyframe the graph does not connect: its uncertainty is the driving between them.
     distance[k] = std::isfinite(d) ? d : std::abs(keyframes[from].travel_m - keyframes[k].travel_m);
@@ -271,16 +272,17 @@ std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& 
 // the old path.
 std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyframes,
                                         const PoseGraph& graph) const {
-  if (keyframes.size() < 2) return {};
+  const int current = static_cast<int>(keyframes.size()) - 1;
+  if (current < 1) return {};
   return CandidatesAt(keyframes, graph,
-                      GraphDistances(keyframes, graph, static_cast<int>(keyframes.size()) - 1,
-                                     params_.guess_graph_m));
+                      GraphDistances(keyframes, graph, current, params_.guess_graph_m, current),
+                      current, params_.max_view_angle_rad);
 }
 
 std::vector<int> LoopCloser::CandidatesAt(const std::vector<LoopKeyframe>& keyframes,
                                           const PoseGraph& graph,
-                                          const std::vector<double>& graph_distance) const {
-  const int current = static_cast<int>(keyframes.size()) - 1;
+                                          const std::vector<double>& graph_distance, int current,
+                                          double max_view_angle_rad) const {
   if (current < 1) return {};
   const Pose2 P_now = graph.Node(keyframes[current].node);
   std::vector<std::pair<double, int>> scored;
@@ -291,7 +293,7 @@ std::vector<int> LoopCloser::CandidatesAt(const std::vector<LoopKeyframe>& keyfr
     const double radius = SearchRadius(g);
     const double d = (P.Translation() - P_now.Translation()).norm();
     const double turn = std::abs(NormalizeAngle(P.theta - P_now.theta));
-    const double view = std::min(M_PI, params_.max_view_angle_rad + params_.view_angle_per_m * g);
+    const double view = std::min(M_PI, max_view_angle_rad + params_.view_angle_per_m * g);
     if (d <= radius && turn <= view) {
       scored.emplace_back((d + params_.candidate_turn_weight_m_per_rad * turn) / radius, k);
     }
@@ -320,8 +322,12 @@ std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& ke
                                              const PoseGraph& graph, int old) const {
   const int current = static_cast<int>(keyframes.size()) - 1;
   if (old < 0 || old >= current) return std::nullopt;
-  return MatchAt(keyframes, graph, old,
-                 GraphDistances(keyframes, graph, current, params_.guess_graph_m)[old]);
+  const double graph_distance =
+      GraphDistances(keyframes, graph, current, params_.guess_graph_m, current)[old];
+  const std::unique_ptr<Sides> sides = MakeSides(keyframes, graph, old, current, graph_distance);
+  if (!sides) return std::nullopt;
+  if (std::optional<LoopClosure> loop = QuickMatch(*sides, graph)) return loop;
+  return FullMatch(*sides, graph);
 }
 
 // Both sides of a candidate match: the current keyframe's scan and the old place.
@@ -338,13 +344,12 @@ struct LoopCloser::Sides {
 };
 
 std::unique_ptr<LoopCloser::Sides> LoopCloser::MakeSides(const std::vector<LoopKeyframe>& keyframes,
-                                                         const PoseGraph& graph, int old,
+                                                         const PoseGraph& graph, int old, int current,
                                                          double graph_distance) const {
-  const int current = static_cast<int>(keyframes.size()) - 1;
   const LoopKeyframe& now = keyframes[current];
   const LoopKeyframe& then = keyframes[old];
   if (now.shapes.coarse.empty() || then.shapes.coarse.empty()) return nullptr;
-  Place place = OldPlace(keyframes, graph, old, params_);
+  Place place = OldPlace(keyframes, graph, old, current, params_);
   const double spacing = match_.matcher.alignment.sample_spacing_m;
   std::vector<Point2> samples = internal::AlignmentSamples(now.shapes.fine, spacing);
   std::vector<Point2> place_samples = internal::AlignmentSamples(place.fine, spacing);
@@ -471,15 +476,6 @@ std::optional<LoopClosure> LoopCloser::FullMatch(const Sides& sides, const PoseG
   return Verify(sides, registered, graph);
 }
 
-std::optional<LoopClosure> LoopCloser::MatchAt(const std::vector<LoopKeyframe>& keyframes,
-                                               const PoseGraph& graph, int old,
-                                               double graph_distance) const {
-  const std::unique_ptr<Sides> sides = MakeSides(keyframes, graph, old, graph_distance);
-  if (!sides) return std::nullopt;
-  if (std::optional<LoopClosure> loop = QuickMatch(*sides, graph)) return loop;
-  return FullMatch(*sides, graph);
-}
-
 bool LoopCloser::AsksLargeCorrection(const LoopClosure& closure) const {
   return params_.confirm_near_m > 0.0 &&
          closure.correction.Translation().norm() > params_.max_correction_m;
@@ -508,16 +504,23 @@ bool LoopCloser::MayConfirm(const LoopClosure& pending, const LoopClosure& later
 // 8-13 m by the guessed steps' guess_graph_m).
 bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
                             const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph) const {
-  const double chain_old =
-      GraphDistances(keyframes, graph, a.old_keyframe, params_.guess_graph_m)[b.old_keyframe];
-  const double chain_new =
-      GraphDistances(keyframes, graph, a.new_keyframe, params_.guess_graph_m)[b.new_keyframe];
+  return ConsistentAt(a, b, keyframes, graph, static_cast<int>(keyframes.size()) - 1);
+}
+
+bool LoopCloser::ConsistentAt(const LoopClosure& a, const LoopClosure& b,
+                              const std::vector<LoopKeyframe>& keyframes, const PoseGraph& graph,
+                              int current) const {
+  const auto distances = [&](int from, double guess_m) {
+    return GraphDistances(keyframes, graph, from, guess_m, current);
+  };
+  const double chain_old = distances(a.old_keyframe, params_.guess_graph_m)[b.old_keyframe];
+  const double chain_new = distances(a.new_keyframe, params_.guess_graph_m)[b.new_keyframe];
   // A chain shorter than guess_graph_m crosses no guessed step (each weighs that much); only a
   // longer one is searched again with guessed steps all but closed.
   constexpr double kAvoidGuess = 1e9;  // a chain this long crosses a guessed step
   const auto avoids_guess = [&](int from, int to, double chain) {
     return chain < params_.guess_graph_m ||
-           GraphDistances(keyframes, graph, from, kAvoidGuess)[to] < kAvoidGuess;
+           distances(from, kAvoidGuess)[to] < kAvoidGuess;
   };
   if (!avoids_guess(a.old_keyframe, b.old_keyframe, chain_old) ||
       !avoids_guess(a.new_keyframe, b.new_keyframe, chain_new)) {
@@ -537,15 +540,19 @@ bool LoopCloser::Consistent(const LoopClosure& a, const LoopClosure& b,
 // others would only find the same. The best fit wins, unless another place fits nearly as
 // well somewhere else (AmbiguousMatches, LoopClosureParams::ambiguity_m).
 std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& keyframes,
-                                              const PoseGraph& graph, int current) {
+                                              const PoseGraph& graph, int current,
+                                              double max_view_angle_rad) {
   std::optional<LoopClosure> loop;
   const std::vector<double> graph_distance =
-      GraphDistances(keyframes, graph, current, params_.guess_graph_m);
-  const std::vector<int> candidates = CandidatesAt(keyframes, graph, graph_distance);
+      GraphDistances(keyframes, graph, current, params_.guess_graph_m, current);
+  const std::vector<int> candidates =
+      CandidatesAt(keyframes, graph, graph_distance, current, max_view_angle_rad);
   if (!candidates.empty()) round_robin_ += std::max(1, params_.max_candidates - 1);
   std::vector<std::unique_ptr<Sides>> sides;
   for (const int old : candidates) {
-    if (auto s = MakeSides(keyframes, graph, old, graph_distance[old])) sides.push_back(std::move(s));
+    if (auto s = MakeSides(keyframes, graph, old, current, graph_distance[old])) {
+      sides.push_back(std::move(s));
+    }
   }
   const auto keep_best = [&](std::optional<LoopClosure> candidate) {
     if (candidate && (!loop || candidate->inlier_ratio > loop->inlier_ratio)) loop = std::move(candidate);
@@ -606,7 +613,7 @@ bool LoopCloser::BreaksEarlierLoops(const PoseGraph& graph,
 bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
   const int current = static_cast<int>(keyframes.size()) - 1;
   if (!params_.enabled || current < 1 || current % params_.search_every != 0) return false;
-  return SearchAndDecide(keyframes, graph);
+  return SearchAndDecide(keyframes, graph, current, params_.max_view_angle_rad);
 }
 
 // Keyframes between the final searches (LoopClosureParams::final_searches).
@@ -618,27 +625,19 @@ bool LoopCloser::FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGra
     return false;
   }
   final_searched_ = last;
-  const double view = params_.max_view_angle_rad;
-  params_.max_view_angle_rad = M_PI;
   bool moved = false;
   // Earliest first, each as if it were the last keyframe: a closure found at one may then be
   // confirmed by the next, as during the run.
   for (int i = params_.final_searches - 1; i >= 0; --i) {
     const int current = last - i * kFinalSearchSpacing;
     if (current < 1) continue;
-    if (current == last) {
-      moved = SearchAndDecide(keyframes, graph) || moved;
-    } else {
-      const std::vector<LoopKeyframe> head(keyframes.begin(), keyframes.begin() + current + 1);
-      moved = SearchAndDecide(head, graph) || moved;
-    }
+    moved = SearchAndDecide(keyframes, graph, current, M_PI) || moved;
   }
-  params_.max_view_angle_rad = view;
   return moved;
 }
 
-bool LoopCloser::SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
-  const int current = static_cast<int>(keyframes.size()) - 1;
+bool LoopCloser::SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph,
+                                 int current, double max_view_angle_rad) {
   ++num_searches_;
   pending_.erase(std::remove_if(pending_.begin(), pending_.end(),
                                 [&](const LoopClosure& p) {
@@ -650,7 +649,7 @@ bool LoopCloser::SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, Pos
                                   return current - p.new_keyframe > window;
                                 }),
                  pending_.end());
-  std::optional<LoopClosure> loop = Search(keyframes, graph, current);
+  std::optional<LoopClosure> loop = Search(keyframes, graph, current, max_view_angle_rad);
   if (!loop) return false;
   ++num_found_;
   const Pose2& c = loop->correction;
@@ -668,7 +667,7 @@ bool LoopCloser::SearchAndDecide(const std::vector<LoopKeyframe>& keyframes, Pos
   if (!strong) {
     // A single match must not bend the map: wait for one that agrees with it.
     for (const LoopClosure& p : pending_) {
-      if (MayConfirm(p, *loop, keyframes, graph) && Consistent(p, *loop, keyframes, graph)) {
+      if (MayConfirm(p, *loop, keyframes, graph) && ConsistentAt(p, *loop, keyframes, graph, current)) {
         accepted.push_back(p);
       }
     }
