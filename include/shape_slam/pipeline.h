@@ -324,8 +324,9 @@ class ShapeSlam {
   /// localised by prediction and leaves the map unchanged).
   ScanReport Process(const LaserScan& scan);
 
-  /// At the end of the log: the last keyframes searched for loops once more, from every heading
-  /// (LoopClosureParams::final_searches; once per last keyframe), then a final optimisation of
+  /// At the end of the log: every few keyframes and the last ones searched for loops once more,
+  /// from every heading (LoopClosureParams::final_sweep_every and final_searches; once per last
+  /// keyframe), then a final optimisation of
   /// the pose graph (when it holds loop edges). Call it before writing the outputs; Process
   /// may still be called afterwards.
   void Finish();

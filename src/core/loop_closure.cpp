@@ -127,6 +127,9 @@ std::vector<std::vector<std::pair<int, double>>> Adjacency(const std::vector<Loo
 void LoopClosureParams::Validate() const {
   if (search_every < 1) throw std::invalid_argument("LoopClosureParams::search_every must be >= 1");
   if (final_searches < 0) throw std::invalid_argument("LoopClosureParams::final_searches must be >= 0");
+  if (final_sweep_every < 0) {
+    throw std::invalid_argument("LoopClosureParams::final_sweep_every must be >= 0");
+  }
   if (max_candidates < 1) throw std::invalid_argument("LoopClosureParams::max_candidates must be >= 1");
   NonNegative(submap_travel_m, "LoopClosureParams::submap_travel_m");
   NonNegative(submap_step_m, "LoopClosureParams::submap_step_m");
@@ -621,13 +624,26 @@ constexpr int kFinalSearchSpacing = 2;
 
 bool LoopCloser::FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
   const int last = static_cast<int>(keyframes.size()) - 1;
-  if (!params_.enabled || params_.final_searches <= 0 || last < 1 || last == final_searched_) {
-    return false;
-  }
+  const bool any = params_.final_searches > 0 || params_.final_sweep_every > 0;
+  if (!params_.enabled || !any || last < 1 || last == final_searched_) return false;
   final_searched_ = last;
   bool moved = false;
-  // Earliest first, each as if it were the last keyframe: a closure found at one may then be
-  // confirmed by the next, as during the run.
+  // The sweep (final_sweep_every): a pass of its own over the keyframes, earliest first, each
+  // searched as if it were the last. The closures still pending from the run's last searches
+  // wait for the final searches (no keyframe of the sweep comes after them).
+  if (params_.final_sweep_every > 0) {
+    std::vector<LoopClosure> run_pending;
+    run_pending.swap(pending_);
+    for (int current = params_.final_sweep_every; current < last; current += params_.final_sweep_every) {
+      if (SearchAndDecide(keyframes, graph, current, M_PI)) {
+        graph.Optimize(params_.graph);  // as the mapper does after a correcting closure
+        moved = true;
+      }
+    }
+    pending_.insert(pending_.end(), run_pending.begin(), run_pending.end());
+  }
+  // The final searches, earliest first, each as if it were the last keyframe: a closure found
+  // at one may then be confirmed by the next, as during the run.
   for (int i = params_.final_searches - 1; i >= 0; --i) {
     const int current = last - i * kFinalSearchSpacing;
     if (current < 1) continue;

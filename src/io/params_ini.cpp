@@ -168,6 +168,7 @@ std::vector<Field> Fields(ShapeSlamParams& p) {
       {"loop_closure", "max_view_angle_rad", "... and seen from within this heading difference (rad) ...", &p.loop_closure.max_view_angle_rad},
       {"loop_closure", "view_angle_per_m", "... plus this per metre of pose-graph distance (rad/m; up to pi)", &p.loop_closure.view_angle_per_m},
       {"loop_closure", "final_searches", "at the end of the log, this many last keyframes (2 apart) searched once more with candidates from every heading (0: off)", &p.loop_closure.final_searches},
+      {"loop_closure", "final_sweep_every", "... and before them every this many keyframes, earliest first, from every heading (0: off)", &p.loop_closure.final_sweep_every},
       {"loop_closure", "max_candidates", "old places tried per search: the best-ranked, then the others in turn", &p.loop_closure.max_candidates},
       {"loop_closure", "ambiguity_m", "a search closes no loop when a match against another place puts the keyframe farther than this from the best match (m; 0: off) ...", &p.loop_closure.ambiguity_m},
       {"loop_closure", "ambiguity_fit_margin", "... and fits within this of the best (inlier ratio)", &p.loop_closure.ambiguity_fit_margin},

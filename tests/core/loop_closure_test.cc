@@ -126,7 +126,9 @@ Result CloseLoops(const Scene& world, const Drive& drive, unsigned seed,
   if (final_update) {
     const int searches = closer.NumSearches();
     closer.FinalUpdate(keyframes, r.graph);
-    EXPECT_LE(closer.NumSearches() - searches, params.loop_closure.final_searches);
+    const int sweep = params.loop_closure.final_sweep_every;
+    const int swept = sweep > 0 ? (static_cast<int>(keyframes.size()) - 2) / sweep : 0;
+    EXPECT_LE(closer.NumSearches() - searches, swept + params.loop_closure.final_searches);
     const int after = closer.NumSearches();
     closer.FinalUpdate(keyframes, r.graph);  // once per last keyframe
     EXPECT_EQ(closer.NumSearches(), after);
@@ -412,15 +414,46 @@ TEST(LoopClosureTest, TheLastKeyframesAreSearchedFromEveryHeading) {
     const Pose2 estimate = r.graph.Node(beside).Inverse() * r.graph.Node(last);
     return (estimate.Translation() - truth.Translation()).norm();
   };
-  ShapeSlamParams off;
+  // The final searches alone (the sweep before them changes which old places the rotation of
+  // candidates offers them).
+  ShapeSlamParams on;
+  on.loop_closure.final_sweep_every = 0;
+  ShapeSlamParams off = on;
   off.loop_closure.final_searches = 0;
   const Result open = CloseLoops(LargeLoopWorld(), drive, 4, off, nullptr, 0, true);
-  const Result closed = CloseLoops(LargeLoopWorld(), drive, 4, ShapeSlamParams(), nullptr, 0, true);
+  const Result closed = CloseLoops(LargeLoopWorld(), drive, 4, on, nullptr, 0, true);
   EXPECT_EQ(open.closures, 0);
   EXPECT_GT(last_error(open), 0.3);
   EXPECT_GE(closed.closures, 1);
   EXPECT_LT(last_error(closed), 0.5 * last_error(open));
   ExpectLoopEdgesRight(closed);
+}
+
+// A corridor driven out and back: the way back sees the outbound keyframes' places from the
+// opposite heading, beyond max_view_angle_rad, so the run's searches have no candidate there.
+// The sweep at the end closes the two passes in the middle of the way back, not only at its
+// end (the final searches).
+TEST(LoopClosureTest, TheSweepClosesACorridorDrivenBothWays) {
+  const std::vector<Point2> path = {{1.5, 1.5}, {34.0, 1.5}, {6.0, 1.5}};
+  const Drive drive = DriveAlong(path, 1.0, 0.25 * M_PI / 180.0, 3);
+  const int last = static_cast<int>(drive.truth.size()) - 1;
+  ShapeSlamParams off;
+  off.loop_closure.final_searches = 0;
+  off.loop_closure.final_sweep_every = 0;
+  ShapeSlamParams sweep_only = off;
+  sweep_only.loop_closure.final_sweep_every = ShapeSlamParams().loop_closure.final_sweep_every;
+  const Result open = CloseLoops(LargeLoopWorld(), drive, 4, off, nullptr, 0, true);
+  const Result swept = CloseLoops(LargeLoopWorld(), drive, 4, sweep_only, nullptr, 0, true);
+  EXPECT_EQ(open.closures, 0);
+  // Closures from the middle of the way back, at least 8 keyframes before the last.
+  const int from_middle = static_cast<int>(std::count_if(
+      swept.events.begin(), swept.events.end(), [&](const LoopEvent& e) {
+        return e.decision != LoopDecision::kPending && e.decision != LoopDecision::kAmbiguous &&
+               e.decision != LoopDecision::kRefused && e.closure.new_keyframe < last - 8;
+      }));
+  EXPECT_GE(from_middle, 1);
+  EXPECT_LT(swept.rmse_after, open.rmse_after);
+  ExpectLoopEdgesRight(swept);
 }
 
 TEST(LoopClosureTest, InvalidParametersAreRejected) {
@@ -436,7 +469,9 @@ TEST(LoopClosureTest, InvalidParametersAreRejected) {
   rejected([](LoopClosureParams& p) { p.confirm_near_m = -1.0; });
   rejected([](LoopClosureParams& p) { p.confirm_near_keyframes = 0; });
   rejected([](LoopClosureParams& p) { p.final_searches = -1; });
+  rejected([](LoopClosureParams& p) { p.final_sweep_every = -1; });
 }
 
 }  // namespace
 }  // namespace shape_slam
+

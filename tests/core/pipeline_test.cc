@@ -103,11 +103,13 @@ TEST(PipelineTest, MapsTheLoopWithOdometry) {
 
 // The final optimisation: the loop closes, Finish keeps the trajectory right and the map made
 // of the keyframes at their corrected poses; processing may go on after it. Finish adds loop
-// edges only (the end-of-log searches, LoopClosureParams::final_searches), none without them.
+// edges only (the end-of-log sweep and searches, LoopClosureParams::final_sweep_every and
+// final_searches), none without them.
 TEST(PipelineTest, FinishOptimisesAndRebuildsTheMap) {
   const SimRun run = Simulate(5);
   ShapeSlamParams no_final;
   no_final.loop_closure.final_searches = 0;
+  no_final.loop_closure.final_sweep_every = 0;
   ShapeSlam without(no_final);
   for (const LaserScan& scan : run.scans) without.Process(scan);
   const std::size_t edges_without = without.Graph().Edges().size();
