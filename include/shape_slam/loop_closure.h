@@ -268,13 +268,6 @@ class LoopCloser {
   /// later one confirms is listed twice): the record that says which closures bent the map.
   const std::vector<LoopEvent>& Events() const { return events_; }
 
-  /// The candidates of a search for the last keyframe, best first (exposed for tests).
-  std::vector<int> Candidates(const std::vector<LoopKeyframe>& keyframes,
-                              const PoseGraph& graph) const;
-  /// Matches the last keyframe against the place around keyframe `old`: the verified closure,
-  /// or nullopt (exposed for tests).
-  std::optional<LoopClosure> Match(const std::vector<LoopKeyframe>& keyframes,
-                                   const PoseGraph& graph, int old) const;
   /// Whether two closures agree (the cycle they form through the graph closes, see
   /// confirm_tolerance_*). Never across a guessed step: where either chain of the cycle along
   /// the graph cannot avoid a keyframe only the motion model placed (guess_sigma_*), the cycle

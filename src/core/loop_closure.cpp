@@ -273,15 +273,6 @@ std::vector<double> LoopCloser::GraphDistances(const std::vector<LoopKeyframe>& 
 // heading uncertainty: a 180 deg scanner's view from the opposite direction shares little),
 // ordered by distance plus heading difference relative to their search radius, spread along
 // the old path.
-std::vector<int> LoopCloser::Candidates(const std::vector<LoopKeyframe>& keyframes,
-                                        const PoseGraph& graph) const {
-  const int current = static_cast<int>(keyframes.size()) - 1;
-  if (current < 1) return {};
-  return CandidatesAt(keyframes, graph,
-                      GraphDistances(keyframes, graph, current, params_.guess_graph_m, current),
-                      current, params_.max_view_angle_rad);
-}
-
 std::vector<int> LoopCloser::CandidatesAt(const std::vector<LoopKeyframe>& keyframes,
                                           const PoseGraph& graph,
                                           const std::vector<double>& graph_distance, int current,
@@ -319,18 +310,6 @@ std::vector<int> LoopCloser::CandidatesAt(const std::vector<LoopKeyframe>& keyfr
     candidates.push_back(places[1 + (round_robin_ + j) % others]);
   }
   return candidates;
-}
-
-std::optional<LoopClosure> LoopCloser::Match(const std::vector<LoopKeyframe>& keyframes,
-                                             const PoseGraph& graph, int old) const {
-  const int current = static_cast<int>(keyframes.size()) - 1;
-  if (old < 0 || old >= current) return std::nullopt;
-  const double graph_distance =
-      GraphDistances(keyframes, graph, current, params_.guess_graph_m, current)[old];
-  const std::unique_ptr<Sides> sides = MakeSides(keyframes, graph, old, current, graph_distance);
-  if (!sides) return std::nullopt;
-  if (std::optional<LoopClosure> loop = QuickMatch(*sides, graph)) return loop;
-  return FullMatch(*sides, graph);
 }
 
 // Both sides of a candidate match: the current keyframe's scan and the old place.
