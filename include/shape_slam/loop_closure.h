@@ -21,6 +21,7 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -250,10 +251,13 @@ class LoopCloser {
   /// graph. Returns true when an accepted edge disagrees with the graph (optimise it).
   bool Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph);
   /// At the end of the log: every final_sweep_every-th keyframe, then the last keyframes
-  /// (final_searches), searched once more from every heading and decided as Update decides
-  /// (the sweep optimises `graph` after each correcting closure). Once per last keyframe.
-  /// Returns true when the graph needs optimising (as Update).
-  bool FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph);
+  /// (final_searches), searched once more from every heading and decided as Update decides.
+  /// The sweep calls `optimize` after each correcting closure, so that the next keyframe is
+  /// searched in the corrected graph (the graph's owner optimises, as after Update). Once per
+  /// last keyframe. Returns true when a closure of the final searches asks for an optimisation
+  /// (as Update).
+  bool FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph,
+                   const std::function<void()>& optimize);
 
   /// Loop edges accepted so far.
   int NumLoopClosures() const { return num_accepted_; }

@@ -601,12 +601,12 @@ bool LoopCloser::Update(const std::vector<LoopKeyframe>& keyframes, PoseGraph& g
 // Keyframes between the final searches (LoopClosureParams::final_searches).
 constexpr int kFinalSearchSpacing = 2;
 
-bool LoopCloser::FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph) {
+bool LoopCloser::FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGraph& graph,
+                             const std::function<void()>& optimize) {
   const int last = static_cast<int>(keyframes.size()) - 1;
   const bool any = params_.final_searches > 0 || params_.final_sweep_every > 0;
   if (!params_.enabled || !any || last < 1 || last == final_searched_) return false;
   final_searched_ = last;
-  bool moved = false;
   // The sweep (final_sweep_every): a pass of its own over the keyframes, earliest first, each
   // searched as if it were the last. The closures still pending from the run's last searches
   // wait for the final searches (no keyframe of the sweep comes after them).
@@ -614,15 +614,13 @@ bool LoopCloser::FinalUpdate(const std::vector<LoopKeyframe>& keyframes, PoseGra
     std::vector<LoopClosure> run_pending;
     run_pending.swap(pending_);
     for (int current = params_.final_sweep_every; current < last; current += params_.final_sweep_every) {
-      if (SearchAndDecide(keyframes, graph, current, M_PI)) {
-        graph.Optimize(params_.graph);  // as the mapper does after a correcting closure
-        moved = true;
-      }
+      if (SearchAndDecide(keyframes, graph, current, M_PI)) optimize();
     }
     pending_.insert(pending_.end(), run_pending.begin(), run_pending.end());
   }
   // The final searches, earliest first, each as if it were the last keyframe: a closure found
   // at one may then be confirmed by the next, as during the run.
+  bool moved = false;
   for (int i = params_.final_searches - 1; i >= 0; --i) {
     const int current = last - i * kFinalSearchSpacing;
     if (current < 1) continue;

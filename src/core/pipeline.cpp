@@ -406,8 +406,11 @@ void ShapeSlam::Optimize() {
   ++num_optimizations_;
 }
 
+// The final optimisation runs whenever the graph holds a loop edge, whether or not the final
+// searches asked for one: closures that agreed with the graph (LoopDecision::kAgreed) were added
+// without an optimisation.
 void ShapeSlam::Finish() {
-  loop_closer_.FinalUpdate(places_, graph_);
+  loop_closer_.FinalUpdate(places_, graph_, [this] { Optimize(); });
   const auto& edges = graph_.Edges();
   const bool has_loops =
       std::any_of(edges.begin(), edges.end(), [](const PoseGraphEdge& e) { return e.loop; });

@@ -125,12 +125,13 @@ Result CloseLoops(const Scene& world, const Drive& drive, unsigned seed,
   }
   if (final_update) {
     const int searches = closer.NumSearches();
-    closer.FinalUpdate(keyframes, r.graph);
+    const auto optimize = [&] { r.graph.Optimize(params.loop_closure.graph); };
+    closer.FinalUpdate(keyframes, r.graph, optimize);
     const int sweep = params.loop_closure.final_sweep_every;
     const int swept = sweep > 0 ? (static_cast<int>(keyframes.size()) - 2) / sweep : 0;
     EXPECT_LE(closer.NumSearches() - searches, swept + params.loop_closure.final_searches);
     const int after = closer.NumSearches();
-    closer.FinalUpdate(keyframes, r.graph);  // once per last keyframe
+    closer.FinalUpdate(keyframes, r.graph, optimize);  // once per last keyframe
     EXPECT_EQ(closer.NumSearches(), after);
   }
   r.rmse_before = PositionRmse(drive.estimate, drive.truth);
