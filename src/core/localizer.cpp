@@ -120,6 +120,9 @@ void LocalizerParams::Validate() const {
   InRange(recheck_half_window_m, 0.0, 100.0, "LocalizerParams::recheck_half_window_m");
   InRange(recheck_half_window_rad, 0.0, M_PI, "LocalizerParams::recheck_half_window_rad");
   InRange(recheck_margin, 0.0, 1.0, "LocalizerParams::recheck_margin");
+  InRange(recheck_poor_fit, 0.0, 1.0, "LocalizerParams::recheck_poor_fit");
+  InRange(recheck_poor_half_window_m, 0.0, 100.0, "LocalizerParams::recheck_poor_half_window_m");
+  InRange(recheck_poor_half_window_rad, 0.0, M_PI, "LocalizerParams::recheck_poor_half_window_rad");
   InRange(field_track_min_fit, 0.0, 1.0, "LocalizerParams::field_track_min_fit");
   InRange(field_track_half_window_m, 0.0, 100.0, "LocalizerParams::field_track_half_window_m");
   InRange(field_track_half_window_rad, 0.0, M_PI, "LocalizerParams::field_track_half_window_rad");
@@ -472,7 +475,7 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
     report.lost_event = true;
     return report;
   }
-  if (v.trusted && !dropped && Recheck(shapes, scan, samples, v)) {
+  if (v.trusted && !dropped && Recheck(shapes, scan, samples, odometry_delta.has_value(), v)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
     report.rechecked = true;
@@ -517,19 +520,25 @@ std::optional<Localizer::Verified> Localizer::FieldTrack(const ScanShapes& shape
 }
 
 // The map's check of the tracked pose (LocalizerParams::recheck_*): every recheck_every matched
-// scans, the best pose of the map's likelihood field near the tracked one, verified by the
-// registration (Verify) and better by recheck_margin there before and after, replaces it (`v`;
-// true). `samples`: the scan's (GlobalSamples), shared with RelocalizeOffMap.
+// scans, and without odometry at every scan the map's likelihood field scores below
+// recheck_poor_fit (in the wider window then; the schedule goes on), the best pose of the map's
+// likelihood field near the tracked one, verified by the registration (Verify) and better by
+// recheck_margin there before and after, replaces it (`v`; true). `samples`: the scan's
+// (GlobalSamples), shared with RelocalizeOffMap.
 bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan,
-                        const std::vector<Point2>& samples, Verified& v) {
-  if (params_.recheck_every <= 0 || challenger_ || ++recheck_scans_ < params_.recheck_every) {
-    return false;
-  }
-  recheck_scans_ = 0;
+                        const std::vector<Point2>& samples, bool odometry, Verified& v) {
+  if (params_.recheck_every <= 0 || challenger_) return false;
+  const bool scheduled = ++recheck_scans_ >= params_.recheck_every;
+  if (scheduled) recheck_scans_ = 0;
   const Pose2 T_map_sensor = v.T_map_robot * scan.T_robot_sensor;
+  const bool check_poor = !odometry && params_.recheck_poor_fit > 0.0;
+  if (!scheduled && !check_poor) return false;
   const double tracked_fit = global_search_.Fit(samples, T_map_sensor);
+  const bool poor = check_poor && tracked_fit < params_.recheck_poor_fit;
+  if (!scheduled && !poor) return false;
   const std::vector<WindowHypothesis> found = global_search_.Search(
-      samples, T_map_sensor, params_.recheck_half_window_m, params_.recheck_half_window_rad);
+      samples, T_map_sensor, poor ? params_.recheck_poor_half_window_m : params_.recheck_half_window_m,
+      poor ? params_.recheck_poor_half_window_rad : params_.recheck_half_window_rad);
   if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return false;
   const Verified c = Verify(shapes, scan, found.front().T_model_scan, params_.min_global_fit);
   if (!c.trusted || global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor) <

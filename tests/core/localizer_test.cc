@@ -420,6 +420,12 @@ TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
   params.recheck_margin = -0.1;
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   params = LocalizerParams();
+  params.recheck_poor_fit = 1.5;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = LocalizerParams();
+  params.recheck_poor_half_window_rad = 4.0;
+  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  params = LocalizerParams();
   params.field_track_min_fit = 1.5;
   EXPECT_THROW(params.Validate(), std::invalid_argument);
   params = LocalizerParams();
@@ -445,6 +451,53 @@ TEST(LocalizerTest, TheMapsCheckLeavesARightPoseRight) {
     params.stages.use_odometry = odometry;
     EXPECT_EQ(TrackFromTheStart(SceneMap(testing::LoopWorld()), params, run, true), 0)
         << "odometry " << odometry;
+  }
+}
+
+// Without odometry, a tracked pose the map's field scores below recheck_poor_fit is checked at
+// once in the wider window (recheck_poor_*). Here the robot is carried 1.35 m along its way
+// (9 scans left out), further than the tracking's motion bound (0.5 m) and the scheduled check's
+// window (0.6 m) reach; the loss detection and the search off the map are off, so that only
+// the map's check can find it. With the poor-fit check the pose comes right and stays right; without
+// it, it never does. (On real logs, a slid pose: docs/notebook.md, 2026-12-07.)
+TEST(LocalizerTest, WithoutOdometryAPoorlyFittingPoseIsCheckedInAWiderWindow) {
+  const SimRun full = Simulate(0, 60, 7);
+  constexpr std::size_t kJumpAt = 20, kLeftOut = 9;
+  SimRun run;
+  for (std::size_t i = 0; i < full.scans.size(); ++i) {
+    if (i >= kJumpAt && i < kJumpAt + kLeftOut) continue;
+    run.scans.push_back(full.scans[i]);
+    run.truth.push_back(full.truth[i]);
+  }
+  for (const double poor_fit : {0.5, 0.0}) {
+    LocalizerParams params;
+    params.stages.use_odometry = false;
+    params.stages.max_motion_per_scan_m = 0.5;
+    params.recheck_poor_fit = poor_fit;
+    params.lost_after_scans = 1000;
+    params.fit_drop_ratio = 0.0;
+    params.off_map_fit = 0.0;
+    Localizer localizer(SceneMap(testing::LoopWorld()), params);
+    localizer.SetInitialPose(run.truth[0]);
+    int right_from = -1;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      const bool right =
+          report.localized && PosesWithin(report.T_map_robot, run.truth[i], 0.1, 0.05);
+      if (i < kJumpAt) {
+        EXPECT_TRUE(right) << "poor_fit " << poor_fit << ", scan " << i;
+      } else if (right_from >= 0) {
+        EXPECT_TRUE(right) << "poor_fit " << poor_fit << ", scan " << i;
+      } else if (right) {
+        right_from = static_cast<int>(i);
+      }
+    }
+    if (poor_fit > 0.0) {
+      EXPECT_GE(right_from, static_cast<int>(kJumpAt));
+      EXPECT_LT(right_from, static_cast<int>(run.scans.size()) - 5);
+    } else {
+      EXPECT_EQ(right_from, -1);
+    }
   }
 }
 
