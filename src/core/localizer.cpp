@@ -536,20 +536,28 @@ bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan,
   const double tracked_fit = global_search_.Fit(samples, T_map_sensor);
   const bool poor = check_poor && tracked_fit < params_.recheck_poor_fit;
   if (!scheduled && !poor) return false;
-  const std::vector<WindowHypothesis> found = global_search_.Search(
-      samples, T_map_sensor, poor ? params_.recheck_poor_half_window_m : params_.recheck_half_window_m,
-      poor ? params_.recheck_poor_half_window_rad : params_.recheck_half_window_rad);
-  if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return false;
-  const Verified c = Verify(shapes, scan, found.front().T_model_scan, params_.min_global_fit);
-  if (!c.trusted || global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor) <
-                        tracked_fit + params_.recheck_margin) {
-    return false;
-  }
+  // The best pose of a window, verified and still better by the margin after it.
+  const auto check = [&](double half_window_m, double half_window_rad) -> std::optional<Verified> {
+    const std::vector<WindowHypothesis> found =
+        global_search_.Search(samples, T_map_sensor, half_window_m, half_window_rad);
+    if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return std::nullopt;
+    const Verified c = Verify(shapes, scan, found.front().T_model_scan, params_.min_global_fit);
+    if (!c.trusted || global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor) <
+                          tracked_fit + params_.recheck_margin) {
+      return std::nullopt;
+    }
+    return c;
+  };
+  // The wider window first; where its best pose fails, the scheduled check is still made.
+  std::optional<Verified> c;
+  if (poor) c = check(params_.recheck_poor_half_window_m, params_.recheck_poor_half_window_rad);
+  if (!c && scheduled) c = check(params_.recheck_half_window_m, params_.recheck_half_window_rad);
+  if (!c) return false;
   Hypothesis& h = hypotheses_.front();
-  h.T_map_robot = c.T_map_robot;
-  h.fit = c.fit;
+  h.T_map_robot = c->T_map_robot;
+  h.fit = c->fit;
   recent_.reset();
-  v = c;
+  v = *c;
   return true;
 }
 
