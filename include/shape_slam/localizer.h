@@ -141,8 +141,8 @@ struct LocalizerParams {
   /// below recheck_poor_fit (0: never), within the wider recheck_poor_half_window_m and
   /// recheck_poor_half_window_rad (where that window's best pose fails, a scheduled check is
   /// still made in its own window). In the map of a log's own run every right pose (within 0.10 m
-  /// and 2 deg of the mapping run) scored 0.5 or more (aces and infinite-corridor, copies 0 and 2,
-  /// with and without odometry); below it, a tracked pose has slid along a corridor or turned,
+  /// and 2 deg of the mapping run) scored 0.5 or more (aces copies 0 and 2, infinite-corridor
+  /// copy 0, with and without odometry); below it, a tracked pose has slid along a corridor or turned,
   /// further than the scheduled check reaches, or the robot is where the map holds nothing (the
   /// verification by the registration guards that case). With odometry the prior holds the pose
   /// and the robot is off the map more often than slid: the poor-fit check is left out there.
