@@ -280,7 +280,8 @@ class Localizer {
     Eigen::Matrix3d covariance = Eigen::Matrix3d::Zero();
   };
   bool Recheck(const ScanShapes& shapes, const LaserScan& scan,
-               const std::vector<Point2>& samples, bool odometry, Verified& v);
+               const std::vector<Point2>& samples, bool odometry, Verified& v,
+               std::optional<double>& map_fit);
   // What only the tracked pose gets (TrackPose): its recent scan, the visible map without what
   // the scan saw through (with odometry), and the retry's wider occlusion tolerance.
   struct TrackingAids {
@@ -326,7 +327,8 @@ class Localizer {
   std::vector<Point2> GlobalSamples(const ScanShapes& shapes) const;
   bool RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
                         const std::vector<Point2>& samples,
-                        const std::optional<Pose2>& odometry_delta, Verified& v);
+                        const std::optional<Pose2>& odometry_delta, Verified& v,
+                        const std::optional<double>& tracked_map_fit);
   std::optional<Verified> SearchOffMap(const ScanShapes& shapes, const LaserScan& scan,
                                        const std::vector<Point2>& samples,
                                        const Pose2& T_map_robot_tracked) const;

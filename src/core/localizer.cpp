@@ -475,12 +475,16 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
     report.lost_event = true;
     return report;
   }
-  if (v.trusted && !dropped && Recheck(shapes, scan, samples, odometry_delta.has_value(), v)) {
+  // The map alone scores the tracked pose once, for the map's check and the search off the map.
+  std::optional<double> map_fit;
+  if (v.trusted && !dropped &&
+      Recheck(shapes, scan, samples, odometry_delta.has_value(), v, map_fit)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
     report.rechecked = true;
   }
-  if (params_.off_map_fit > 0.0 && RelocalizeOffMap(shapes, scan, samples, odometry_delta, v)) {
+  if (params_.off_map_fit > 0.0 &&
+      RelocalizeOffMap(shapes, scan, samples, odometry_delta, v, map_fit)) {
     report.T_map_robot = v.T_map_robot;
     report.inlier_ratio = v.fit;
     report.matched = report.recovered_event = true;
@@ -524,28 +528,31 @@ std::optional<Localizer::Verified> Localizer::FieldTrack(const ScanShapes& shape
 // recheck_poor_fit (in the wider window then; the schedule goes on), the best pose of the map's
 // likelihood field near the tracked one, verified by the registration (Verify) and better by
 // recheck_margin there before and after, replaces it (`v`; true). `samples`: the scan's
-// (GlobalSamples), shared with RelocalizeOffMap.
+// (GlobalSamples), shared with RelocalizeOffMap; `map_fit`: the field's score of `v`, computed
+// here when still unknown and kept for RelocalizeOffMap.
 bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan,
-                        const std::vector<Point2>& samples, bool odometry, Verified& v) {
+                        const std::vector<Point2>& samples, bool odometry, Verified& v,
+                        std::optional<double>& map_fit) {
   if (params_.recheck_every <= 0 || challenger_) return false;
   const bool scheduled = ++recheck_scans_ >= params_.recheck_every;
   if (scheduled) recheck_scans_ = 0;
   const Pose2 T_map_sensor = v.T_map_robot * scan.T_robot_sensor;
   const bool check_poor = !odometry && params_.recheck_poor_fit > 0.0;
   if (!scheduled && !check_poor) return false;
-  const double tracked_fit = global_search_.Fit(samples, T_map_sensor);
+  if (!map_fit) map_fit = global_search_.Fit(samples, T_map_sensor);
+  const double tracked_fit = *map_fit;
   const bool poor = check_poor && tracked_fit < params_.recheck_poor_fit;
   if (!scheduled && !poor) return false;
   // The best pose of a window, verified and still better by the margin after it.
+  double replacement_fit = 0.0;
   const auto check = [&](double half_window_m, double half_window_rad) -> std::optional<Verified> {
     const std::vector<WindowHypothesis> found =
         global_search_.Search(samples, T_map_sensor, half_window_m, half_window_rad);
     if (found.empty() || found.front().fit < tracked_fit + params_.recheck_margin) return std::nullopt;
     const Verified c = Verify(shapes, scan, found.front().T_model_scan, params_.min_global_fit);
-    if (!c.trusted || global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor) <
-                          tracked_fit + params_.recheck_margin) {
-      return std::nullopt;
-    }
+    if (!c.trusted) return std::nullopt;
+    replacement_fit = global_search_.Fit(samples, c.T_map_robot * scan.T_robot_sensor);
+    if (replacement_fit < tracked_fit + params_.recheck_margin) return std::nullopt;
     return c;
   };
   // The wider window first; where its best pose fails, the scheduled check is still made.
@@ -558,6 +565,7 @@ bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan,
   h.fit = c->fit;
   recent_.reset();
   v = *c;
+  map_fit = replacement_fit;
   return true;
 }
 
@@ -566,13 +574,15 @@ bool Localizer::Recheck(const ScanShapes& shapes, const LaserScan& scan,
 // explains off_map_margin better becomes the challenger, tracked beside the pose; once it has
 // stayed matched and that much better for off_map_confirm_scans scans it replaces the tracked
 // pose (`v`; true). A look-alike corridor fits one scan; rarely the next few as well.
+// `tracked_map_fit`: the field's score of `v` when Recheck computed it.
 bool Localizer::RelocalizeOffMap(const ScanShapes& shapes, const LaserScan& scan,
                                  const std::vector<Point2>& samples,
-                                 const std::optional<Pose2>& odometry_delta, Verified& v) {
+                                 const std::optional<Pose2>& odometry_delta, Verified& v,
+                                 const std::optional<double>& tracked_map_fit) {
   const auto map_fit = [&](const Pose2& T_map_robot) {
     return global_search_.Fit(samples, T_map_robot * scan.T_robot_sensor);
   };
-  const double tracked_fit = map_fit(v.T_map_robot);
+  const double tracked_fit = tracked_map_fit ? *tracked_map_fit : map_fit(v.T_map_robot);
   off_map_scans_ = tracked_fit < params_.off_map_fit ? off_map_scans_ + 1 : 0;
   if (challenger_) {
     const Verified c = Track(shapes, scan, *challenger_, odometry_delta, 0,
