@@ -7,8 +7,10 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <random>
 #include <stdexcept>
+#include <vector>
 
 #include "pose_matchers.h"
 #include "test_scenes.h"
@@ -403,40 +405,26 @@ TEST(LocalizerTest, RejectsInvalidParamsAndAnEmptyMap) {
   LocalizerParams params;
   params.max_hypotheses = 0;
   EXPECT_THROW(Localizer(SceneMap(testing::LoopWorld()), params), std::invalid_argument);
-  params = LocalizerParams();
-  params.min_inlier_ratio = 1.5;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
   EXPECT_THROW(Localizer{PolylineMap{}}, std::invalid_argument);
-  params = LocalizerParams();
-  params.fast_track_min_fit = -0.1;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.recheck_every = -1;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.recheck_half_window_rad = 4.0;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.recheck_margin = -0.1;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.recheck_poor_fit = 1.5;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.recheck_poor_half_window_rad = 4.0;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.field_track_min_fit = 1.5;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.field_track_half_window_rad = 4.0;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.field_track_prior_sigma_m = 0.0;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
-  params = LocalizerParams();
-  params.field_track_check_ratio = -0.5;
-  EXPECT_THROW(params.Validate(), std::invalid_argument);
+  // One value out of range each.
+  const std::vector<std::function<void(LocalizerParams&)>> broken = {
+      [](LocalizerParams& p) { p.min_inlier_ratio = 1.5; },
+      [](LocalizerParams& p) { p.fast_track_min_fit = -0.1; },
+      [](LocalizerParams& p) { p.recheck_every = -1; },
+      [](LocalizerParams& p) { p.recheck_half_window_rad = 4.0; },
+      [](LocalizerParams& p) { p.recheck_margin = -0.1; },
+      [](LocalizerParams& p) { p.recheck_poor_fit = 1.5; },
+      [](LocalizerParams& p) { p.recheck_poor_half_window_rad = 4.0; },
+      [](LocalizerParams& p) { p.field_track_min_fit = 1.5; },
+      [](LocalizerParams& p) { p.field_track_half_window_rad = 4.0; },
+      [](LocalizerParams& p) { p.field_track_prior_sigma_m = 0.0; },
+      [](LocalizerParams& p) { p.field_track_check_ratio = -0.5; },
+  };
+  for (std::size_t i = 0; i < broken.size(); ++i) {
+    LocalizerParams p;
+    broken[i](p);
+    EXPECT_THROW(p.Validate(), std::invalid_argument) << "case " << i;
+  }
 }
 
 // The map's check (recheck_*) at every scan leaves a right tracking right: around the block
