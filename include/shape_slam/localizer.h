@@ -32,6 +32,7 @@
 
 #include "shape_slam/motion_model.h"
 #include "shape_slam/odometry_noise.h"
+#include "shape_slam/orientation_histogram.h"
 #include "shape_slam/pipeline.h"
 #include "shape_slam/polyline_map.h"
 #include "shape_slam/types.h"
@@ -177,6 +178,16 @@ struct LocalizerParams {
   /// never). A robot that starts to drive after a turn on the spot is beyond the window, and a
   /// pose inside it can still fit 0.87 (intel, scan 108 of each copy: 2.2 m off for 11 scans).
   double field_track_check_ratio = 0.9;
+  /// The field track's heading from the scans (not in the paper): where the field's best pose in
+  /// the constant velocity's window scores below field_track_turn_below (0: off), the window is
+  /// searched again at the constant velocity's position with the heading the scan turned by since
+  /// the last scan, measured on the two scans' orientation histograms (orientation_histogram.h,
+  /// with field_track_turn: no pose guess needed), when that heading lies beyond the first
+  /// window; its best is taken when it scores field_track_turn_below itself, and field_track_tie
+  /// more than the first window's. A robot that turned on the spot, or more than the last scan
+  /// did, is beyond the constant velocity's window.
+  double field_track_turn_below = 0.7;
+  OrientationHistogramParams field_track_turn;
   /// Where a log starts in a map (LocalizeFirstScan, run --map without --initial): the first
   /// localized pose counts once this many more scans have been matched after it with the
   /// tracking never lost in between (0: at once). A pose found by the global search alone can
@@ -343,6 +354,10 @@ class Localizer {
   ShapeSlamParams search_stages_;  // the stages of a search's registrations (search_retry)
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   std::optional<RecentScan> recent_;    // tracking only
+  // Without odometry (field_track_turn_below): the last scan's orientation histogram, and the
+  // turn from it to the scan being processed.
+  OrientationHistogram last_histogram_;
+  std::optional<double> scan_turn_;
   LocalizerStatus status_ = LocalizerStatus::kSearching;
   bool was_localized_ = false;
   int drop_scans_ = 0;   // tracking: consecutive scans with a dropped fit

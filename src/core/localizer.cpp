@@ -128,6 +128,8 @@ void LocalizerParams::Validate() const {
   InRange(field_track_half_window_rad, 0.0, M_PI, "LocalizerParams::field_track_half_window_rad");
   InRange(field_track_tie, 0.0, 1.0, "LocalizerParams::field_track_tie");
   InRange(field_track_check_ratio, 0.0, 1.0, "LocalizerParams::field_track_check_ratio");
+  InRange(field_track_turn_below, 0.0, 1.0, "LocalizerParams::field_track_turn_below");
+  field_track_turn.Validate();
   if (!(field_track_prior_sigma_m > 0.0 && field_track_prior_sigma_m <= 100.0)) {
     throw std::invalid_argument("LocalizerParams::field_track_prior_sigma_m must be in (0, 100]");
   }
@@ -496,8 +498,9 @@ LocalizerReport Localizer::TrackPose(const ScanShapes& shapes, const LaserScan& 
 }
 
 // The field track (LocalizerParams::field_track_*), without odometry: the map's likelihood field
-// near the constant-velocity prediction gives the prediction, which the registration refines as
-// an odometry prediction (Track with a zero increment) under the field track's prior and matched
+// near the constant-velocity prediction (or near it turned as the scans' orientation histograms
+// say, field_track_turn_below) gives the prediction, which the registration refines as an
+// odometry prediction (Track with a zero increment) under the field track's prior and matched
 // at `min_fit`. Nothing when it does not fit field_track_min_fit. `samples`: the scan's
 // (GlobalSamples).
 std::optional<Localizer::Verified> Localizer::FieldTrack(const ScanShapes& shapes,
@@ -506,12 +509,30 @@ std::optional<Localizer::Verified> Localizer::FieldTrack(const ScanShapes& shape
                                                          const Hypothesis& h, double min_fit,
                                                          const TrackingAids& aids) const {
   if (shapes.coarse.empty() || samples.empty()) return std::nullopt;
-  const Pose2 moved = h.T_map_robot * h.velocity.Predict().value_or(Pose2());
-  const Pose2 T_map_sensor = moved * scan.T_robot_sensor;
-  const std::vector<WindowHypothesis> found =
+  Pose2 moved = h.T_map_robot * h.velocity.Predict().value_or(Pose2());
+  Pose2 T_map_sensor = moved * scan.T_robot_sensor;
+  std::vector<WindowHypothesis> found =
       global_search_.Search(samples, T_map_sensor, params_.field_track_half_window_m,
                             params_.field_track_half_window_rad);
   if (found.empty()) return std::nullopt;
+  // The scans' turn (field_track_turn_below): the window again at the heading the robot turned
+  // by, when the constant velocity's window fits poorly and that heading lies beyond it.
+  if (scan_turn_ && found.front().fit < params_.field_track_turn_below) {
+    const Pose2 turned{moved.x, moved.y, NormalizeAngle(h.T_map_robot.theta + *scan_turn_)};
+    const double beyond = std::abs(NormalizeAngle(turned.theta - moved.theta));
+    if (beyond > params_.field_track_half_window_rad) {
+      const Pose2 T_map_sensor_turned = turned * scan.T_robot_sensor;
+      std::vector<WindowHypothesis> found_turned =
+          global_search_.Search(samples, T_map_sensor_turned, params_.field_track_half_window_m,
+                                params_.field_track_half_window_rad);
+      if (!found_turned.empty() && found_turned.front().fit >= params_.field_track_turn_below &&
+          found_turned.front().fit >= found.front().fit + params_.field_track_tie) {
+        moved = turned;
+        T_map_sensor = T_map_sensor_turned;
+        found = std::move(found_turned);
+      }
+    }
+  }
   const bool tie =
       global_search_.Fit(samples, T_map_sensor) >= found.front().fit - params_.field_track_tie;
   const Pose2 predicted =
@@ -659,6 +680,13 @@ LocalizerReport Localizer::Process(const LaserScan& input_scan) {
   const ScanShapes shapes = ExtractScanShapes(scan, params_.stages.shapes);
   bool stale = false;
   const std::optional<Pose2> raw_odometry_delta = OdometryDelta(scan, stale);
+  scan_turn_.reset();
+  if (!raw_odometry_delta && params_.field_track_turn_below > 0.0) {
+    OrientationHistogram histogram =
+        ComputeOrientationHistogram(shapes.fine, params_.field_track_turn);
+    scan_turn_ = HistogramTurn(last_histogram_, histogram, params_.field_track_turn);
+    last_histogram_ = std::move(histogram);
+  }
   LocalizerReport report = status_ == LocalizerStatus::kTracking
                                ? TrackPose(shapes, scan, raw_odometry_delta)
                                : Search(shapes, scan, Calibrated(raw_odometry_delta));

@@ -516,6 +516,50 @@ TEST(LocalizerTest, WithoutOdometryTheMapsFieldPredictsTheScans) {
   }
 }
 
+// Without odometry, a robot that drives along the hall, turns on the spot at its corner by
+// 0.52 rad a scan and drives on: the constant velocity predicts the first turning scan straight
+// on and the first scan after the turn still turning, both beyond the field track's 0.1 rad.
+// The scans' orientation histograms give the turn (field_track_turn_below): every scan of the
+// turn and after it is field-tracked and right; without them those two are not field-tracked.
+TEST(LocalizerTest, WithoutOdometryTheScansTurnCentresTheFieldTrack) {
+  const testing::Scene world = testing::LoopWorld();
+  std::mt19937 prng(3);
+  SimRun run;
+  const auto record = [&](const Pose2& pose) {
+    LaserScan scan = testing::SimulateScan(world, pose, testing::ScannerModel{}, prng);
+    scan.timestamp_s = 100.0 + 0.1 * static_cast<double>(run.scans.size());
+    run.scans.push_back(scan);
+    run.truth.push_back(pose);
+  };
+  for (int k = 0; k <= 10; ++k) record(Pose2(11.0 + 0.15 * k, 1.5, 0.0));
+  constexpr int kTurnAt = 11;
+  for (int k = 1; k <= 3; ++k) record(Pose2(12.5, 1.5, k * M_PI / 6.0));
+  for (int k = 1; k <= 8; ++k) record(Pose2(12.5, 1.5 + 0.15 * k, M_PI / 2.0));
+  for (const double turn_below : {0.7, 0.0}) {
+    LocalizerParams params;
+    params.stages.use_odometry = false;
+    params.field_track_turn_below = turn_below;
+    Localizer localizer(SceneMap(world), params);
+    localizer.SetInitialPose(run.truth[0]);
+    std::vector<bool> field_tracked;
+    for (std::size_t i = 0; i < run.scans.size(); ++i) {
+      const LocalizerReport report = localizer.Process(run.scans[i]);
+      ASSERT_TRUE(report.localized) << "turn_below " << turn_below << ", scan " << i;
+      EXPECT_THAT(report.T_map_robot, IsNearly(run.truth[i], 0.1, 0.05))
+          << "turn_below " << turn_below << ", scan " << i;
+      field_tracked.push_back(report.field_tracked);
+    }
+    for (const int i : {kTurnAt, kTurnAt + 3}) {
+      EXPECT_EQ(field_tracked[i], turn_below > 0.0) << "turn_below " << turn_below << ", scan " << i;
+    }
+    if (turn_below > 0.0) {
+      for (std::size_t i = kTurnAt; i < field_tracked.size(); ++i) {
+        EXPECT_TRUE(field_tracked[i]) << "scan " << i;
+      }
+    }
+  }
+}
+
 // The fast track's fit in the map is the localizer's own, not the mapper's; the rest of the
 // stages are as given. With the fast track off the tracking holds as well.
 TEST(LocalizerTest, TheFastTrackFitIsTheLocalizersOwn) {
