@@ -680,11 +680,15 @@ LocalizerReport Localizer::Process(const LaserScan& input_scan) {
   const ScanShapes shapes = ExtractScanShapes(scan, params_.stages.shapes);
   bool stale = false;
   const std::optional<Pose2> raw_odometry_delta = OdometryDelta(scan, stale);
+  // The turn since the last scan (field_track_turn_below): every scan's histogram is kept, so
+  // that a scan without odometry in a log with it (a stall) is turned from the scan before.
   scan_turn_.reset();
-  if (!raw_odometry_delta && params_.field_track_turn_below > 0.0) {
+  if (params_.field_track_turn_below > 0.0) {
     OrientationHistogram histogram =
         ComputeOrientationHistogram(shapes.fine, params_.field_track_turn);
-    scan_turn_ = HistogramTurn(last_histogram_, histogram, params_.field_track_turn);
+    if (!raw_odometry_delta) {
+      scan_turn_ = HistogramTurn(last_histogram_, histogram, params_.field_track_turn);
+    }
     last_histogram_ = std::move(histogram);
   }
   LocalizerReport report = status_ == LocalizerStatus::kTracking

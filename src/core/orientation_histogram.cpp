@@ -35,6 +35,7 @@ OrientationHistogram ComputeOrientationHistogram(const std::vector<Polyline>& po
       if (!(length > 0.0) || !std::isfinite(length)) continue;
       double direction = std::atan2(d.y(), d.x());
       if (direction < 0.0) direction += M_PI;  // undirected: [0, pi)
+      if (direction >= M_PI) direction -= M_PI;  // atan2 gives pi for (-x, +0)
       const int bin = std::min(n - 1, static_cast<int>(direction / M_PI * n));
       raw[bin] += length;
       out.total_m += length;
