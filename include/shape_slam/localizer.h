@@ -354,8 +354,8 @@ class Localizer {
   ShapeSlamParams search_stages_;  // the stages of a search's registrations (search_retry)
   std::vector<Hypothesis> hypotheses_;  // best first; one while tracking
   std::optional<RecentScan> recent_;    // tracking only
-  // Without odometry (field_track_turn_below): the last scan's orientation histogram, and the
-  // turn from it to the scan being processed.
+  // field_track_turn_below: the last scan's orientation histogram (kept at every scan), and,
+  // for a scan without an odometry increment, the turn from it to the scan being processed.
   OrientationHistogram last_histogram_;
   std::optional<double> scan_turn_;
   LocalizerStatus status_ = LocalizerStatus::kSearching;
