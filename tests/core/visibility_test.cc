@@ -48,6 +48,32 @@ TEST(VisibilityTest, WallBehindAWallIsCutAtTheShadowRays) {
   }
 }
 
+TEST(VisibilityTest, WallsWithinTheOcclusionToleranceAreSeenAndWallsBeyondItAreNot) {
+  // The occlusion test's tolerance: a short wall 3 cm behind a wall is seen whole, walls farther
+  // behind it than the tolerance in every bin they span are left out whole, and one that reaches
+  // past the near walls' bins is seen there, from the shadow edge on.
+  MapFixture map;
+  map.Add(0, {{2, -1}, {2, 1}});
+  map.Add(1, {{2.03, -0.1}, {2.03, 0.1}});   // 3 cm behind: within depth_tolerance_m (5 cm)
+  map.Add(2, {{2.5, -1}, {2.5, 1}});         // hidden in every bin
+  map.Add(3, {{2.5, -0.5}, {2.5, 0.5}});     // hidden, shorter
+  map.Add(4, {{6, -1}, {6, 1}, {6, 9}});     // hidden, then seen above the near walls (y > 3)
+  const std::vector<VisiblePolyline> v = map.See(Pose2());
+  std::vector<PolylineId> sources;
+  for (const VisiblePolyline& p : v) sources.push_back(p.source);
+  std::sort(sources.begin(), sources.end());
+  EXPECT_EQ(sources, (std::vector<PolylineId>{0, 1, 4}));
+  for (const VisiblePolyline& p : v) {
+    if (p.source == 0 || p.source == 1) {
+      EXPECT_NEAR(p.source_from_m, 0.0, 1e-9);
+      EXPECT_NEAR(p.source_to_m, p.source == 0 ? 2.0 : 0.2, 1e-9);
+    } else {  // the shadow of |y| <= 1 at x = 2 reaches y = 3 at x = 6
+      EXPECT_NEAR(p.points_sensor.front().y(), 3.0, 0.05);
+      EXPECT_NEAR(p.source_to_m, 10.0, 1e-9);
+    }
+  }
+}
+
 TEST(VisibilityTest, AWallTheScanSawThroughNeitherHidesNorIsSeen) {
   // The map's near wall (x = 2, |y| <= 1) is gone: the scan's beams reach the far wall (x = 4)
   // through it. With the scan's rays the near wall is left out and the far wall is whole; where
