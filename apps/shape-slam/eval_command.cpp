@@ -1,7 +1,9 @@
 // shape-slam eval: ATE and Kümmerle relation errors of a trajectory against reference poses.
+#include <cmath>
 #include <iomanip>
 #include <iostream>
 #include <sstream>
+#include <utility>
 
 #include "cli.h"
 #include "commands.h"
@@ -30,6 +32,7 @@ ArgParser MakeParser() {
       .Option("--gross-m", {"M"}, "gross local error: a step off by more than this, metres", "0.5")
       .Option("--gross-deg", {"DEG"}, "gross local error: a step off by more than this, degrees",
               "10")
+      .Flag("--list-gross", "also list each gross local error: its poses, both motions, the error")
       .Flag("--json", "print one JSON object");
   return parser;
 }
@@ -40,7 +43,17 @@ void RelationJson(io::JsonWriter& json, const char* key, const RelationErrors& e
   json.EndObject();
 }
 
-std::string Json(const EvaluationResult& r) {
+// The error of a gross step: translation (m) and rotation (deg) of reference^-1 * estimated.
+std::pair<double, double> StepError(const GrossStep& g) {
+  const Pose2 e = g.reference.Inverse() * g.estimated;
+  return {e.Translation().norm(), std::abs(e.theta) * 180.0 / M_PI};
+}
+
+void PoseJson(io::JsonWriter& json, const char* key, const Pose2& p) {
+  json.Key(key).BeginArray().Value(p.x).Value(p.y).Value(p.theta).EndArray();
+}
+
+std::string Json(const EvaluationResult& r, bool list_gross) {
   io::JsonWriter json;
   json.BeginObject().Key("matched_poses").Value(r.matched_poses);
   json.Key("reference_poses").Value(r.reference_poses);
@@ -48,12 +61,25 @@ std::string Json(const EvaluationResult& r) {
   RelationJson(json, "local", r.local);
   RelationJson(json, "revisit", r.revisit);
   json.Key("gross_local").BeginObject().Key("count").Value(r.gross_local.count);
-  json.Key("steps").Value(r.gross_local.steps).EndObject();
+  json.Key("steps").Value(r.gross_local.steps);
+  if (list_gross) {
+    json.Key("list").BeginArray();
+    for (const GrossStep& g : r.gross_local.listed) {
+      const auto [m, deg] = StepError(g);
+      json.BeginObject().Key("index").Value(g.index).Key("t1").Value(g.t1_s).Key("t2").Value(g.t2_s);
+      PoseJson(json, "estimated", g.estimated);
+      PoseJson(json, "reference", g.reference);
+      json.Key("error_m").Value(m).Key("error_deg").Value(deg).EndObject();
+    }
+    json.EndArray();
+  }
+  json.EndObject();
   json.EndObject();
   return json.str() + "\n";
 }
 
-std::string Text(const EvaluationResult& r, bool have_relations, const EvaluationParams& params) {
+std::string Text(const EvaluationResult& r, bool have_relations, const EvaluationParams& params,
+                 bool list_gross) {
   std::ostringstream out;
   out << std::fixed << std::setprecision(4) << "poses matched   " << r.matched_poses << " of "
       << r.reference_poses << " reference poses\n"
@@ -70,6 +96,21 @@ std::string Text(const EvaluationResult& r, bool have_relations, const Evaluatio
   out << std::defaultfloat << "gross local err " << r.gross_local.count << " of "
       << r.gross_local.steps << " steps (off by > " << params.gross_translation_m << " m or > "
       << params.gross_rotation_deg << " deg)\n";
+  if (list_gross) {
+    const auto motion = [](const Pose2& p) {
+      std::ostringstream m;
+      m << std::fixed << std::setprecision(3) << p.x << " " << p.y << " " << std::setprecision(1)
+        << p.theta * 180.0 / M_PI << " deg";
+      return m.str();
+    };
+    for (const GrossStep& g : r.gross_local.listed) {
+      const auto [m, deg] = StepError(g);
+      out << std::fixed << std::setprecision(3) << "  pose " << g.index - 1 << " -> " << g.index
+          << " (t " << g.t1_s << " -> " << g.t2_s << "): moved " << motion(g.estimated)
+          << ", reference " << motion(g.reference) << ", off by " << m << " m "
+          << std::setprecision(1) << deg << " deg\n";
+    }
+  }
   return out.str();
 }
 
@@ -100,7 +141,9 @@ int RunEval(const Args& args) {
               << " reference poses were associated with the trajectory (timestamps within "
               << params.max_time_difference_s << " s): the figures cover only those\n";
   }
-  std::cout << (parser.Has("--json") ? Json(result) : Text(result, !relations.empty(), params));
+  const bool list_gross = parser.Has("--list-gross");
+  std::cout << (parser.Has("--json") ? Json(result, list_gross)
+                                     : Text(result, !relations.empty(), params, list_gross));
   return 0;
 }
 

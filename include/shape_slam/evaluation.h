@@ -42,11 +42,23 @@ struct RelationErrors {
   double mean_rotation_deg = 0;   ///< mean absolute rotation error
 };
 
+/// One gross local error: the step from estimate pose `index - 1` to pose `index`.
+struct GrossStep {
+  /// The step's second pose, counted from 0 in the estimate's time order (for a trajectory
+  /// written one pose per scan in time order, as `run` writes it: the scan's index).
+  std::size_t index = 0;
+  double t1_s = 0.0;      ///< timestamps of the step's two estimate poses
+  double t2_s = 0.0;
+  Pose2 estimated;        ///< the estimate's motion, in the frame of its first pose
+  Pose2 reference;        ///< the reference's motion between the associated reference poses
+};
+
 /// Tracking failures that a mean hides: steps between consecutive estimate poses (both with a
 /// reference pose) whose motion is off the reference motion by more than the thresholds.
 struct GrossLocalErrors {
   std::size_t steps = 0;  ///< consecutive estimate pose pairs that both have a reference pose
   std::size_t count = 0;  ///< of those, the steps off by > gross_translation_m or _rotation_deg
+  std::vector<GrossStep> listed;  ///< those steps, in estimate order (count of them)
 };
 
 struct EvaluationResult {

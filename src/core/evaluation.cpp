@@ -78,11 +78,14 @@ GrossLocalErrors CountGrossLocalErrors(const std::vector<StampedPose>& est,
     const auto r = FindByTime(ref, est[i].timestamp_s, params.max_time_difference_s);
     if (r && previous) {
       const Pose2 estimated = est[i - 1].pose.Inverse() * est[i].pose;
-      const Pose2 error = (ref[*previous].pose.Inverse() * ref[*r].pose).Inverse() * estimated;
+      const Pose2 reference = ref[*previous].pose.Inverse() * ref[*r].pose;
+      const Pose2 error = reference.Inverse() * estimated;
       ++gross.steps;
       if (error.Translation().norm() > params.gross_translation_m ||
           std::abs(error.theta) > max_rotation_rad) {
         ++gross.count;
+        gross.listed.push_back(
+            {i, est[i - 1].timestamp_s, est[i].timestamp_s, estimated, reference});
       }
     }
     previous = r;

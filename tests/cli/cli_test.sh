@@ -101,6 +101,11 @@ expect 0 '"gross_local":\{"count":1,"steps":[1-9]' -- \
   "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --json
 expect 0 '"gross_local":\{"count":0,' -- \
   "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --json --gross-m 1.5
+# --list-gross names the step: from the first pose (0) to the second (1), moved 1 m more.
+expect 0 "pose 0 -> 1 \(t [0-9.]+ -> [0-9.]+\): moved .*, off by 1\.000 m 0\.0 deg" -- \
+  "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --list-gross
+expect 0 '"list":\[\{"index":1,"t1":[0-9.e+-]+,"t2":[0-9.e+-]+,"estimated":\[' -- \
+  "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --json --list-gross
 expect 2 "gross-deg must be >= 0" -- \
   "$BIN" eval "$WORK/slide.tum" "$WORK/head/trajectory.tum" --gross-deg -1
 

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -112,6 +113,38 @@ TEST(EvaluationTest, CountsInjectedGrossLocalErrors) {
   loose.gross_translation_m = 0.25;
   loose.gross_rotation_deg = 8.0;
   EXPECT_EQ(EvaluateTrajectory(estimate, reference, {}, loose).gross_local.count, 7u);
+}
+
+TEST(EvaluationTest, ListsEachGrossLocalErrorWithBothMotions) {
+  const std::vector<StampedPose> reference = Spiral(30);
+  const double deg = M_PI / 180.0;
+  const auto error_of = [&](std::size_t step) {
+    if (step == 7) return Pose2(0.7, -0.2, 0.0);  // gross: a slide
+    if (step == 18) return Pose2(0.0, 0.0, -14 * deg);  // gross: a heading jump
+    if (step == 25) return Pose2(0.2, 0.0, 3 * deg);  // within both thresholds
+    return Pose2();
+  };
+  std::vector<StampedPose> estimate = WithStepErrors(reference, error_of);
+  // Steps are taken in time order, whatever the order of the poses given.
+  std::mt19937 rng(3);
+  std::shuffle(estimate.begin(), estimate.end(), rng);
+  const GrossLocalErrors gross = EvaluateTrajectory(estimate, reference, {}).gross_local;
+  ASSERT_EQ(gross.listed.size(), 2u);
+  EXPECT_EQ(gross.count, gross.listed.size());
+  for (const auto& [g, step] : {std::pair{gross.listed[0], 7}, std::pair{gross.listed[1], 18}}) {
+    EXPECT_EQ(g.index, static_cast<std::size_t>(step));
+    EXPECT_DOUBLE_EQ(g.t1_s, reference[step - 1].timestamp_s);
+    EXPECT_DOUBLE_EQ(g.t2_s, reference[step].timestamp_s);
+    const Pose2 truth = reference[step - 1].pose.Inverse() * reference[step].pose;
+    EXPECT_NEAR(g.reference.x, truth.x, 1e-9);
+    EXPECT_NEAR(g.reference.y, truth.y, 1e-9);
+    EXPECT_NEAR(g.reference.theta, truth.theta, 1e-9);
+    const Pose2 error = g.reference.Inverse() * g.estimated;
+    const Pose2 injected = error_of(step);
+    EXPECT_NEAR(error.x, injected.x, 1e-9);
+    EXPECT_NEAR(error.y, injected.y, 1e-9);
+    EXPECT_NEAR(error.theta, injected.theta, 1e-9);
+  }
 }
 
 TEST(EvaluationTest, GrossLocalErrorsSkipStepsWithoutReference) {
