@@ -58,7 +58,7 @@ struct GrossStep {
 struct GrossLocalErrors {
   std::size_t steps = 0;  ///< consecutive estimate pose pairs that both have a reference pose
   std::size_t count = 0;  ///< of those, the steps off by > gross_translation_m or _rotation_deg
-  std::vector<GrossStep> listed;  ///< those steps, in estimate order (count of them)
+  std::vector<GrossStep> listed;  ///< those steps, in time order (count of them)
 };
 
 struct EvaluationResult {
