@@ -43,9 +43,9 @@ void RelationJson(io::JsonWriter& json, const char* key, const RelationErrors& e
   json.EndObject();
 }
 
-// The error of a gross step: translation (m) and rotation (deg) of reference^-1 * estimated.
+// The error of a gross step (GrossStep::Error): translation (m) and rotation (deg).
 std::pair<double, double> StepError(const GrossStep& g) {
-  const Pose2 e = g.reference.Inverse() * g.estimated;
+  const Pose2 e = g.Error();
   return {e.Translation().norm(), std::abs(e.theta) * 180.0 / M_PI};
 }
 

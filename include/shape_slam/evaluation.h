@@ -51,6 +51,8 @@ struct GrossStep {
   double t2_s = 0.0;
   Pose2 estimated;        ///< the estimate's motion, in the frame of its first pose
   Pose2 reference;        ///< the reference's motion between the associated reference poses
+  /// How far the estimate's motion is off the reference's: reference^-1 * estimated.
+  Pose2 Error() const { return reference.Inverse() * estimated; }
 };
 
 /// Tracking failures that a mean hides: steps between consecutive estimate poses (both with a

@@ -77,15 +77,15 @@ GrossLocalErrors CountGrossLocalErrors(const std::vector<StampedPose>& est,
   for (std::size_t i = 0; i < est.size(); ++i) {
     const auto r = FindByTime(ref, est[i].timestamp_s, params.max_time_difference_s);
     if (r && previous) {
-      const Pose2 estimated = est[i - 1].pose.Inverse() * est[i].pose;
-      const Pose2 reference = ref[*previous].pose.Inverse() * ref[*r].pose;
-      const Pose2 error = reference.Inverse() * estimated;
+      const GrossStep step{i, est[i - 1].timestamp_s, est[i].timestamp_s,
+                           est[i - 1].pose.Inverse() * est[i].pose,
+                           ref[*previous].pose.Inverse() * ref[*r].pose};
+      const Pose2 error = step.Error();
       ++gross.steps;
       if (error.Translation().norm() > params.gross_translation_m ||
           std::abs(error.theta) > max_rotation_rad) {
         ++gross.count;
-        gross.listed.push_back(
-            {i, est[i - 1].timestamp_s, est[i].timestamp_s, estimated, reference});
+        gross.listed.push_back(step);
       }
     }
     previous = r;
