@@ -83,7 +83,9 @@ ArgParser MakeParser() {
           "  loops.csv        per loop closure found: the keyframes (index, timestamp), what\n"
           "                   became of it (agreed, taken, pending, confirmed, refused), the\n"
           "                   edge, the correction it asked, its fit both ways, the graph\n"
-          "                   distance (bench/tools/loop_errors.py scores it)\n\n"
+          "                   distance, whether it holds the heading and the offset across a\n"
+          "                   corridor only and the corridor's direction (rad, old keyframe's\n"
+          "                   frame) (bench/tools/loop_errors.py scores it)\n\n"
           "Continuing a map (--map MAP): MAP is loaded and is the starting map; the new scans\n"
           "extend it (its polylines are merged with what they see, as in mapping) and the\n"
           "output map holds both. The first scan is placed by the global search of 'shape-slam\n"
@@ -308,7 +310,7 @@ std::string FormatLoops(const std::vector<LoopEvent>& events,
   std::ostringstream csv;
   csv << "new_keyframe,old_keyframe,new_timestamp_s,old_timestamp_s,decision,edge_x_m,edge_y_m,"
          "edge_theta_rad,correction_m,correction_rad,inlier_ratio,reverse_inlier_ratio,"
-         "graph_distance_m\n"
+         "graph_distance_m,across_only,along_rad\n"
       << std::fixed;
   const auto stamp = [&](int k) {
     return k >= 0 && k < static_cast<int>(keyframes.size()) ? keyframes[k].scan->timestamp_s : 0.0;
@@ -321,7 +323,8 @@ std::string FormatLoops(const std::vector<LoopEvent>& events,
         << c.edge.T_from_to.y << ',' << c.edge.T_from_to.theta << ','
         << c.correction.Translation().norm() << ',' << c.correction.theta << ','
         << std::setprecision(4) << c.inlier_ratio << ',' << c.reverse_inlier_ratio << ','
-        << std::setprecision(2) << c.graph_distance_m << '\n';
+        << std::setprecision(2) << c.graph_distance_m << ',' << (c.across_only ? 1 : 0) << ','
+        << std::setprecision(4) << c.along_rad << '\n';
   }
   return csv.str();
 }

@@ -3,7 +3,9 @@
 
 Each closure's edge (the old keyframe's robot frame to the new one's) is compared with the
 reference's relative pose of the two scans (reference poses by timestamp, as `eval` associates
-them). A closure is wrong when the two differ by more than --max-m or --max-deg. Prints, per
+them). A closure is wrong when the two differ by more than --max-m or --max-deg; a closure that
+holds only the heading and the offset across a corridor (loops.csv across_only = 1) is judged on
+those (its position along the corridor, along_rad, is the graph's own guess). Prints, per
 decision (agreed, taken, pending, confirmed, refused), how many closures there were and how many
 were wrong, then every wrong closure that went into the graph (agreed, taken, confirmed): the
 ones that bent the map.
@@ -47,6 +49,10 @@ def score(loops_path, reference_path, max_m, max_deg, max_dt):
             edge = (float(row["edge_x_m"]), float(row["edge_y_m"]), float(row["edge_theta_rad"]))
             e = variants.between(truth, edge)
             error = (math.hypot(e[0], e[1]), abs(math.degrees(e[2])))
+            if row.get("across_only") == "1":  # the offset across the corridor, in the old frame
+                a = float(row["along_rad"])
+                across = -math.sin(a) * (edge[0] - truth[0]) + math.cos(a) * (edge[1] - truth[1])
+                error = (abs(across), error[1])
         wrong = error is not None and (error[0] > max_m or error[1] > max_deg)
         rows.append((row, error, wrong))
     return rows
@@ -89,10 +95,11 @@ def main(argv):
     for row, error, wrong in rows:
         if args.all or (wrong and row["decision"] in ACCEPTED):
             err = "no reference" if error is None else f"error {error[0]:.2f} m {error[1]:.1f} deg"
+            across = "  across only" if row.get("across_only") == "1" else ""
             print(f"  {row['decision']:9s} keyframe {row['new_keyframe']:>5s} -> {row['old_keyframe']:>5s}"
                   f"  correction {float(row['correction_m']):6.2f} m  fit {float(row['inlier_ratio']):.2f}"
                   f" / {float(row['reverse_inlier_ratio']):.2f}  graph {float(row['graph_distance_m']):6.1f} m"
-                  f"  {err}{'  WRONG' if wrong else ''}")
+                  f"  {err}{across}{'  WRONG' if wrong else ''}")
     return 0
 
 

@@ -87,6 +87,19 @@ struct LoopClosureParams {
   /// (LoopClosureTest) stays open with a margin of 0.25 or more (docs/design.md).
   double ambiguity_m = 1.0;
   double ambiguity_fit_margin = 0.2;
+  /// Look-alikes along one corridor (not in the paper; AcrossCorridor): where the matches that
+  /// fit within ambiguity_fit_margin of the best all put the keyframe at one heading (within
+  /// corridor_heading_rad of the best's) and on one line (within corridor_offset_m of it),
+  /// they disagree only along that line: the heading and the offset across it are known. The
+  /// best match is then kept for those alone -- its position along the line is the graph's own,
+  /// with corridor_sigma_m of standard deviation along it -- and decided as any closure
+  /// (pending until a consistent one confirms it). corridor_sigma_m 0: off, such a search is
+  /// ambiguous. Measured on infinite-corridor (docs/notebook.md, 2026-12-08): at its big loop's
+  /// return every match was refused as ambiguous while the heading drift they agreed on was
+  /// 6-21 deg.
+  double corridor_heading_rad = 0.05;
+  double corridor_offset_m = 0.5;
+  double corridor_sigma_m = 10.0;
   /// Old places tried per search (spread along the old path); the best verified match wins.
   /// The best-ranked one is tried at every search, the others in turn (the region can hold
   /// many more places than a search tries).
@@ -217,6 +230,10 @@ struct LoopClosure {
   double inlier_ratio = 0.0;
   double reverse_inlier_ratio = 0.0;
   double graph_distance_m = 0.0;  ///< along the graph between the two keyframes, when found
+  /// The edge holds the heading and the offset across a corridor only (AcrossCorridor): along
+  /// the direction along_rad (in the old keyframe's frame) it is the graph's own estimate.
+  bool across_only = false;
+  double along_rad = 0.0;
 };
 
 /// What became of a closure a search found (LoopCloser::Events).
@@ -355,5 +372,14 @@ struct ImpliedPose {
 /// ambiguity_m from where the best puts it (LoopClosureParams::ambiguity_m; never when 0).
 bool AmbiguousMatches(const std::vector<ImpliedPose>& implied, double ambiguity_m,
                       double fit_margin);
+
+/// An ambiguous search's best closure `best` (its implied pose the best of `implied`) kept for
+/// the heading and the offset across a corridor, when every match within ambiguity_fit_margin
+/// of the best lies on one line at one heading (LoopClosureParams::corridor_*); else none. Its
+/// position along the line is the graph's (the correction asks nothing along it), its variance
+/// along it corridor_sigma_m squared more.
+std::optional<LoopClosure> AcrossCorridor(const std::vector<ImpliedPose>& implied,
+                                          const LoopClosure& best, const PoseGraph& graph,
+                                          const LoopClosureParams& params);
 
 }  // namespace shape_slam

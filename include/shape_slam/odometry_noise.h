@@ -133,6 +133,58 @@ class OdometryNoiseLearner {
   double scale_xy_ = 1.0, scale_theta_ = 1.0;
 };
 
+/// Odometry edges in the pose graph (issue 22's "odometry as a robust prior", Cartographer's
+/// odometry constraints; not in the paper): between consecutive keyframes that both have fresh
+/// odometry, the odometry's increment beside the scan-to-scan edge, mostly for its heading. A
+/// long corridor holds the scans' heading poorly (infinite-corridor's tracking drifts 1.3 deg
+/// per 10 scans, its wheels 0.4: docs/notebook.md, 2026-12-07), and the closures of a large
+/// loop then disagree by more than they may. The noise is learned from the log (OdometryEdgeNoise);
+/// a Cauchy loss keeps a glitch from bending the graph.
+struct OdometryEdgeParams {
+  bool enabled = true;
+  /// The learned variances are multiplied by this: the differences it learns from hold the
+  /// scan edges' noise too, and the edges are correlated with the tracking that used the
+  /// odometry as its prior. Measured (notebook, 2026-12-08): 4 held infinite-corridor best but
+  /// cost aces and its variants 4-7 mm; 16 costs them nothing measurable.
+  double variance_scale = 16.0;
+  /// The position variance is this many times the learned one: the heading is what the wheels
+  /// add (their position cost aces 0.5-2.5 cm of ATE; notebook, 2026-12-07 night).
+  double position_variance_factor = 100.0;
+  double loss_sigmas = 3.0;   ///< Cauchy loss scale, standard deviations
+  int window = 300;           ///< the last this many keyframe steps count
+  int min_samples = 30;       ///< no edge before this many are in
+  /// A step turning less than this is straight (its variance per metre), else turning (per
+  /// radian); with fewer than min_group of either kind, both rates come from all steps.
+  double straight_below_rad = 0.1;
+  int min_group = 10;
+  double distance_floor_m = 0.05;  ///< added to each step's length: a step on the spot
+  void Validate() const;
+};
+
+/// The noise of the odometry's keyframe-to-keyframe increments, learned from the keyframe steps
+/// that scans matched: the squared difference between the odometry's step and the scan edge's,
+/// in heading and in position, over the step's length (straight steps) or its turn (turning
+/// ones); the medians of the last `window`, converted to variances as those of chi-square
+/// variables with one (heading) and two (position) degrees of freedom. Medians: a glitch or a
+/// wrong match among them moves nothing.
+class OdometryEdgeNoise {
+ public:
+  explicit OdometryEdgeNoise(const OdometryEdgeParams& params);
+  /// One matched keyframe step: the odometry's increment and the scan edge's relative pose.
+  void Add(const Pose2& odometry_step, const Pose2& scan_step);
+  /// The covariance of an odometry increment between keyframes (x, y, theta), once min_samples
+  /// steps are in (else none).
+  std::optional<Eigen::Matrix3d> Covariance(const Pose2& odometry_step) const;
+  int Samples() const { return static_cast<int>(samples_.size()); }
+
+ private:
+  struct Sample {
+    double distance_m, turn_rad, theta2, xy2;
+  };
+  OdometryEdgeParams params_;
+  std::vector<Sample> samples_;  // in order; the last `window` count
+};
+
 /// Odometry that has not moved since the first scan is no odometry (logs without any carry
 /// zeros). Moved is false until a pose differs from the first one seen beyond rounding, then
 /// true for good.

@@ -101,6 +101,7 @@ struct ShapeSlamParams {
   LoopClosureParams loop_closure;   ///< loop_closure.h
   OdometryNoiseParams odometry_noise;
   OdometryCalibrationParams odometry_calibration;
+  OdometryEdgeParams odometry_edges;  ///< odometry_noise.h
   /// Also match each scan against the last keyframe scan's polylines (besides the visible map):
   /// a fresh, undistorted view of the same place that keeps tracking robust where the map is
   /// still thin or imperfect. Not in the paper, which matches against the map alone.
@@ -413,6 +414,7 @@ class ShapeSlam {
     LaserScan scan;                      // counter-clockwise beams
     bool trusted = false;                // its pose was confirmed by a match
     Pose2 T_local_robot;                 // its pose in the tracking frame (never moved)
+    std::optional<Pose2> T_odometry;     // its dead-reckoned pose, with fresh odometry
   };
   struct ScanAnchor {
     double timestamp_s = 0.0;
@@ -461,6 +463,7 @@ class ShapeSlam {
                          Registration& registration, ScanReport& report);
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
+  void AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placement);
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
                                const Pose2& T_map_robot, Placement placement,
                                const Eigen::Matrix3d& covariance) const;
@@ -508,6 +511,11 @@ class ShapeSlam {
   OdometryReport odometry_;
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
   OdometryCalibrator odometry_calibrator_;  // the log's odometry heading error
+  OdometryEdgeNoise odometry_edge_noise_;   // the noise of the graph's odometry edges
+  // The calibrated odometry's increments composed since the first scan, and its value at this
+  // scan when the odometry gave it a fresh increment (odometry edges; none otherwise).
+  Pose2 T_dead_reckoned_;
+  std::optional<Pose2> scan_dead_reckoned_;
   ShapeSlamParams tracking_params_;      // params_ with the learned odometry noise
   ShapeSlamParams keyframe_stages_;      // params_ for the keyframe track without odometry
   ConstantVelocity velocity_;            // the last motions: the prediction without odometry

@@ -2,9 +2,10 @@
 // stochastic model" and the cycle detection that the paper leaves to future work (§7).
 //
 // Nodes are keyframe poses T_map_node; edges are measured relative poses T_i_j with a
-// covariance: consecutive keyframes (the shape front end's scan-to-scan alignment) and loop
-// closures (a scan matched against an old keyframe). Loop edges get a robust loss so that a
-// wrong closure cannot tear the map apart.
+// covariance: consecutive keyframes (the shape front end's scan-to-scan alignment and, beside it,
+// the odometry's increment) and loop closures (a scan matched against an old keyframe). Loop
+// edges get a robust loss so that a wrong closure cannot tear the map apart; an odometry edge
+// its own, so that a glitch cannot either.
 #pragma once
 
 #include <Eigen/Core>
@@ -23,6 +24,9 @@ struct PoseGraphEdge {
   /// A consecutive step that only the motion model gave (no match, no odometry): the loop
   /// search counts it as LoopClosureParams::guess_graph_m of driving.
   bool guessed = false;
+  /// A non-loop edge's Cauchy loss scale in standard deviations (0: none, the default): an
+  /// odometry edge's (OdometryEdgeParams::loss_sigmas). Loop edges take the graph's scales.
+  double loss_sigmas = 0.0;
 };
 
 struct PoseGraphParams {

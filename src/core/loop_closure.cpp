@@ -134,6 +134,9 @@ void LoopClosureParams::Validate() const {
   NonNegative(submap_travel_m, "LoopClosureParams::submap_travel_m");
   NonNegative(submap_step_m, "LoopClosureParams::submap_step_m");
   NonNegative(ambiguity_m, "LoopClosureParams::ambiguity_m");
+  NonNegative(corridor_heading_rad, "LoopClosureParams::corridor_heading_rad");
+  NonNegative(corridor_offset_m, "LoopClosureParams::corridor_offset_m");
+  NonNegative(corridor_sigma_m, "LoopClosureParams::corridor_sigma_m");
   Fraction(ambiguity_fit_margin, "LoopClosureParams::ambiguity_fit_margin");
   Positive(window_half_m, "LoopClosureParams::window_half_m");
   Positive(window_resolution_m, "LoopClosureParams::window_resolution_m");
@@ -551,6 +554,7 @@ std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& k
     keep_best(std::move(candidate));
   }
   if (loop && AmbiguousMatches(implied, params_.ambiguity_m, params_.ambiguity_fit_margin)) {
+    if (std::optional<LoopClosure> across = AcrossCorridor(implied, *loop, graph, params_)) return across;
     events_.push_back({*loop, LoopDecision::kAmbiguous});
     ++num_ambiguous_;
     return std::nullopt;
@@ -569,6 +573,44 @@ bool AmbiguousMatches(const std::vector<ImpliedPose>& implied, double ambiguity_
            (other.T_graph_keyframe.Translation() - best.T_graph_keyframe.Translation()).norm() >
                ambiguity_m;
   });
+}
+
+std::optional<LoopClosure> AcrossCorridor(const std::vector<ImpliedPose>& implied,
+                                          const LoopClosure& best, const PoseGraph& graph,
+                                          const LoopClosureParams& params) {
+  if (params.corridor_sigma_m <= 0.0 || implied.empty()) return std::nullopt;
+  const ImpliedPose& top = *std::max_element(
+      implied.begin(), implied.end(),
+      [](const ImpliedPose& a, const ImpliedPose& b) { return a.fit < b.fit; });
+  // The rivals in the best match's keyframe frame: one heading, and the line through the farthest.
+  std::vector<Point2> rivals;
+  Point2 farthest = Point2::Zero();
+  for (const ImpliedPose& other : implied) {
+    if (other.fit < top.fit - params.ambiguity_fit_margin) continue;
+    const Pose2 T = top.T_graph_keyframe.Inverse() * other.T_graph_keyframe;
+    if (std::abs(T.theta) > params.corridor_heading_rad) return std::nullopt;
+    rivals.push_back(T.Translation());
+    if (T.Translation().norm() > farthest.norm()) farthest = T.Translation();
+  }
+  if (farthest.norm() <= params.ambiguity_m) return std::nullopt;
+  const Point2 along = farthest.normalized();
+  for (const Point2& p : rivals) {
+    if (std::abs(along.x() * p.y() - along.y() * p.x()) > params.corridor_offset_m) return std::nullopt;
+  }
+  // The edge's position moved along the line to the graph's: the closure asks nothing there.
+  LoopClosure across = best;
+  const Pose2& measured = best.edge.T_from_to;
+  const Point2 along_old = Eigen::Rotation2Dd(measured.theta) * along;  // in the old keyframe's frame
+  const Pose2 T_old_new = graph.Node(best.edge.from).Inverse() * graph.Node(best.edge.to);
+  const Point2 t = measured.Translation() +
+                   (T_old_new.Translation() - measured.Translation()).dot(along_old) * along_old;
+  across.edge.T_from_to = Pose2(t.x(), t.y(), measured.theta);
+  across.edge.covariance.topLeftCorner<2, 2>() +=
+      params.corridor_sigma_m * params.corridor_sigma_m * along_old * along_old.transpose();
+  across.correction = T_old_new.Inverse() * across.edge.T_from_to;
+  across.across_only = true;
+  across.along_rad = std::atan2(along_old.y(), along_old.x());
+  return across;
 }
 
 // The closures already in the graph vote on the new ones: the graph optimised with them must

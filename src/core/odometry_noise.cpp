@@ -204,4 +204,69 @@ bool OdometryStalled(const Pose2& T_odom_robot, const Pose2& last_T_odom_robot,
          T_odom_robot.theta == last_T_odom_robot.theta && longest_recent_step_m >= min_step_m;
 }
 
+void OdometryEdgeParams::Validate() const {
+  internal::NonNegative(variance_scale, "OdometryEdgeParams::variance_scale");
+  internal::Positive(position_variance_factor, "OdometryEdgeParams::position_variance_factor");
+  internal::NonNegative(loss_sigmas, "OdometryEdgeParams::loss_sigmas");
+  internal::NonNegative(straight_below_rad, "OdometryEdgeParams::straight_below_rad");
+  internal::Positive(distance_floor_m, "OdometryEdgeParams::distance_floor_m");
+  if (window < 1 || min_samples < 1 || min_group < 1) {
+    throw std::invalid_argument("OdometryEdgeParams: window, min_samples and min_group must be >= 1");
+  }
+  if (variance_scale == 0.0 && enabled) {
+    throw std::invalid_argument("OdometryEdgeParams::variance_scale must be > 0 when enabled");
+  }
+}
+
+OdometryEdgeNoise::OdometryEdgeNoise(const OdometryEdgeParams& params) : params_(params) {
+  params_.Validate();
+}
+
+void OdometryEdgeNoise::Add(const Pose2& odometry_step, const Pose2& scan_step) {
+  const Pose2 e = odometry_step.Inverse() * scan_step;
+  samples_.push_back({odometry_step.Translation().norm(), std::abs(odometry_step.theta),
+                      e.theta * e.theta, e.Translation().squaredNorm()});
+}
+
+std::optional<Eigen::Matrix3d> OdometryEdgeNoise::Covariance(const Pose2& odometry_step) const {
+  if (Samples() < params_.min_samples) return std::nullopt;
+  const double eps = params_.distance_floor_m;
+  const std::size_t n = std::min<std::size_t>(samples_.size(), params_.window);
+  const auto recent = samples_.end() - static_cast<std::ptrdiff_t>(n);
+  // Squared errors per metre (straight steps) and per radian (turning ones).
+  std::vector<double> straight_theta, straight_xy, turning_theta, turning_xy;
+  for (auto q = recent; q != samples_.end(); ++q) {
+    if (q->turn_rad < params_.straight_below_rad) {
+      straight_theta.push_back(q->theta2 / (q->distance_m + eps));
+      straight_xy.push_back(q->xy2 / (q->distance_m + eps));
+    } else {
+      turning_theta.push_back(q->theta2 / q->turn_rad);
+      turning_xy.push_back(q->xy2 / q->turn_rad);
+    }
+  }
+  const std::size_t min_group = static_cast<std::size_t>(params_.min_group);
+  if (straight_theta.size() < min_group) {  // too few straight steps: every step per metre
+    straight_theta.clear();
+    straight_xy.clear();
+    for (auto q = recent; q != samples_.end(); ++q) {
+      straight_theta.push_back(q->theta2 / (q->distance_m + q->turn_rad + eps));
+      straight_xy.push_back(q->xy2 / (q->distance_m + q->turn_rad + eps));
+    }
+  }
+  const double scale = params_.variance_scale;
+  const double theta_per_m = scale * internal::MedianInPlace(straight_theta) / kChi2Median1;
+  const double xy_per_m = scale * internal::MedianInPlace(straight_xy) / kChi2Median2;
+  const bool turning = turning_theta.size() >= min_group;
+  const double theta_per_rad =
+      turning ? scale * internal::MedianInPlace(turning_theta) / kChi2Median1 : theta_per_m;
+  const double xy_per_rad = turning ? scale * internal::MedianInPlace(turning_xy) / kChi2Median2 : xy_per_m;
+  const double d = odometry_step.Translation().norm(), turn = std::abs(odometry_step.theta);
+  // Floors: 1 mrad and 5 mm, so that a log whose odometry and scans agree exactly (a
+  // simulation) still gives a usable covariance.
+  const double var_theta = std::max(theta_per_m * (d + eps) + theta_per_rad * turn, 1e-6);
+  const double var_xy = params_.position_variance_factor *
+                        std::max(xy_per_m * (d + eps) + xy_per_rad * turn, 2.5e-5);
+  return Eigen::Vector3d(var_xy, var_xy, var_theta).asDiagonal().toDenseMatrix();
+}
+
 }  // namespace shape_slam

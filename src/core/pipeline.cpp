@@ -53,6 +53,7 @@ void ShapeSlamParams::Validate() const {
   loop_closure.Validate();
   odometry_noise.Validate();
   odometry_calibration.Validate();
+  odometry_edges.Validate();
   if (!(min_inlier_ratio >= 0.0 && min_inlier_ratio <= 1.0)) {
     throw std::invalid_argument("ShapeSlamParams::min_inlier_ratio must be in [0, 1]");
   }
@@ -149,6 +150,7 @@ ShapeSlam::ShapeSlam(const ShapeSlamParams& params)
       loop_closer_(params.loop_closure, ToScanMatchParams(params)),
       odometry_noise_(params.odometry_noise),
       odometry_calibrator_(params.odometry_calibration),
+      odometry_edge_noise_(params.odometry_edges),
       tracking_params_(params),
       keyframe_stages_(params),
       velocity_(params.motion_model) {
@@ -323,6 +325,21 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
   return edge;
 }
 
+// The odometry edge (OdometryEdgeParams) beside the scan edge into a new keyframe, when both
+// keyframes had fresh odometry: the calibrated odometry's step between them, its noise learned
+// from the matched steps so far (this one included).
+void ShapeSlam::AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placement) {
+  const std::optional<Pose2>& previous = keyframes_.back().T_odometry;
+  if (!params_.odometry_edges.enabled || !scan_dead_reckoned_ || !previous) return;
+  const Pose2 step = previous->Inverse() * *scan_dead_reckoned_;
+  if (placement == Placement::kMatched) odometry_edge_noise_.Add(step, scan_edge.T_from_to);
+  const std::optional<Eigen::Matrix3d> covariance = odometry_edge_noise_.Covariance(step);
+  if (!covariance) return;
+  PoseGraphEdge odometry{scan_edge.from, scan_edge.to, step, *covariance};
+  odometry.loss_sigmas = params_.odometry_edges.loss_sigmas;
+  graph_.AddEdge(odometry);
+}
+
 // A new pose-graph node, tied to the previous keyframe.
 bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
                             std::vector<Polyline> fine, const Pose2& T_track_robot,
@@ -335,12 +352,13 @@ bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
   if (edge) {
     edge->to = node;
     graph_.AddEdge(*edge);
+    AddOdometryEdge(*edge, placement);
   }
   // Continuing a loaded map: the first keyframe was placed in it (Register), the later ones are
   // registered in it here.
   const bool continued = !initial_map_.Empty(), first = keyframes_.empty();
   if (continued && first) AddMapAnchor(node, T_map_robot, trusted, covariance);
-  keyframes_.push_back({scan, trusted, T_track_robot});
+  keyframes_.push_back({scan, trusted, T_track_robot, scan_dead_reckoned_});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
   return continued && !first && AnchorInLoadedMap(scan, places_.back().shapes, node, T_map_robot);
 }
@@ -567,6 +585,8 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   odometry_.scans_predicted += report.used_odometry ? 1 : 0;
   odometry_.scans_stale += prediction.odometry_stale ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
+  if (prediction.odometry_delta) T_dead_reckoned_ = T_dead_reckoned_ * *prediction.odometry_delta;
+  scan_dead_reckoned_ = prediction.odometry_delta ? std::optional<Pose2>(T_dead_reckoned_) : std::nullopt;
 
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
   const internal::Localization& loc = registration.loc;

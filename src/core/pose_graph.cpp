@@ -51,6 +51,9 @@ void PoseGraph::AddEdge(const PoseGraphEdge& edge) {
   if (!SymmetricPositiveDefinite(edge.covariance)) {
     throw std::invalid_argument("PoseGraph::AddEdge: covariance is not symmetric positive definite");
   }
+  if (!(edge.loss_sigmas >= 0.0) || !std::isfinite(edge.loss_sigmas)) {
+    throw std::invalid_argument("PoseGraph::AddEdge: loss_sigmas must be >= 0 and finite");
+  }
   edges_.push_back(edge);
 }
 
@@ -74,7 +77,9 @@ PoseGraphResult PoseGraph::Optimize(const PoseGraphParams& params) {
   for (const double scale : scales) {
     ceres::Problem problem;
     for (const PoseGraphEdge& e : edges_) {
-      ceres::LossFunction* loss = e.loop ? new ceres::CauchyLoss(scale) : nullptr;
+      ceres::LossFunction* loss = e.loop                ? new ceres::CauchyLoss(scale)
+                                  : e.loss_sigmas > 0.0 ? new ceres::CauchyLoss(e.loss_sigmas)
+                                                        : nullptr;
       problem.AddResidualBlock(
           internal::RelativePoseCost::Create(e.T_from_to, SqrtInformation(e.covariance)), loss,
           x[e.from].data(), x[e.to].data());

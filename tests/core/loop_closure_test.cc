@@ -307,6 +307,62 @@ TEST(LoopClosureTest, MatchesThatPutTheKeyframeApartAreAmbiguous) {
   EXPECT_STREQ(LoopDecisionName(LoopDecision::kAmbiguous), "ambiguous");
 }
 
+// Look-alikes along one corridor (AcrossCorridor): the matches agree on the heading and on the
+// offset across the corridor and disagree along it, so the best is kept for those two: its
+// position along the corridor the graph's own, loosely held; turned or scattered rivals, or the
+// option off, keep the search ambiguous.
+TEST(LoopClosureTest, LookAlikesAlongOneCorridorKeepTheHeadingAndTheOffsetAcrossIt) {
+  PoseGraph graph;
+  graph.AddNode(Pose2());                 // the old keyframe
+  graph.AddNode(Pose2(20.0, 1.0, 0.0));   // the new one, as the drifted graph has it
+  LoopClosure best;
+  const Eigen::Matrix3d tight = Eigen::Vector3d(1e-4, 1e-4, 1e-5).asDiagonal();
+  best.edge = {0, 1, Pose2(25.0, 0.5, 0.1), tight, true};
+  best.inlier_ratio = 0.9;
+  // The new keyframe as each match puts it: the best, and look-alikes 5 m ahead and behind along
+  // the corridor (the keyframe's own x axis), nearly as good.
+  const Pose2 at = graph.Node(0) * best.edge.T_from_to;
+  std::vector<ImpliedPose> implied = {
+      {at * Pose2(-5.0, 0.02, 0.01), 0.85}, {at, 0.9}, {at * Pose2(5.0, -0.03, -0.01), 0.88}};
+  ASSERT_TRUE(AmbiguousMatches(implied, 1.0, 0.2));
+  const LoopClosureParams params;
+  const std::optional<LoopClosure> across = AcrossCorridor(implied, best, graph, params);
+  ASSERT_TRUE(across);
+  EXPECT_TRUE(across->across_only);
+  // The farthest rival sets the line: 5 m along and 3 cm across it.
+  EXPECT_NEAR(across->along_rad, 0.1 + std::atan2(-0.03, 5.0), 1e-9);
+  const Point2 line = Point2(std::cos(across->along_rad), std::sin(across->along_rad));
+  const Point2 across_line(-line.y(), line.x());
+  const Pose2& edge = across->edge.T_from_to;
+  EXPECT_DOUBLE_EQ(edge.theta, 0.1);  // the heading the matches agree on
+  EXPECT_NEAR(edge.Translation().dot(line), Point2(20.0, 1.0).dot(line), 1e-9);  // the graph's
+  EXPECT_NEAR(edge.Translation().dot(across_line), Point2(25.0, 0.5).dot(across_line), 1e-9);
+  const Eigen::Matrix2d c = across->edge.covariance.topLeftCorner<2, 2>();
+  EXPECT_NEAR(line.dot(c * line), 1e-4 + params.corridor_sigma_m * params.corridor_sigma_m, 1e-9);
+  EXPECT_NEAR(across_line.dot(c * across_line), 1e-4, 1e-9);
+  EXPECT_DOUBLE_EQ(across->edge.covariance(2, 2), 1e-5);
+  // The correction asks nothing along the line: only the heading and the offset across it.
+  // (The graph's new keyframe heads 0: its frame is the old one's turned by nothing.)
+  EXPECT_NEAR(across->correction.Translation().dot(line), 0.0, 1e-9);
+  EXPECT_DOUBLE_EQ(across->correction.theta, 0.1);
+
+  // A rival turned beyond corridor_heading_rad, one off the line, or the option off: none.
+  std::vector<ImpliedPose> turned = implied;
+  turned[0].T_graph_keyframe = at * Pose2(-5.0, 0.0, 0.2);
+  EXPECT_FALSE(AcrossCorridor(turned, best, graph, params));
+  std::vector<ImpliedPose> scattered = implied;
+  scattered[2].T_graph_keyframe = at * Pose2(5.0, -3.0, 0.0);
+  EXPECT_FALSE(AcrossCorridor(scattered, best, graph, params));
+  LoopClosureParams off = params;
+  off.corridor_sigma_m = 0.0;
+  EXPECT_FALSE(AcrossCorridor(implied, best, graph, off));
+  // A rival clearly worse than the margin does not count, and without the others nothing is
+  // ambiguous along a line.
+  const std::vector<ImpliedPose> near = {
+      {at, 0.9}, {at * Pose2(0.3, 0.0, 0.0), 0.88}, {at * Pose2(8.0, 4.0, 0.5), 0.5}};
+  EXPECT_FALSE(AcrossCorridor(near, best, graph, params));
+}
+
 // The loop above needs the full search (the estimate is metres off when the robot returns).
 // On the second lap boxes stand along the first corridor, which the old place does not have:
 // the scans fit it only in part. The loop closes with the default refine_min_fit and stays open
@@ -471,6 +527,8 @@ TEST(LoopClosureTest, InvalidParametersAreRejected) {
   rejected([](LoopClosureParams& p) { p.confirm_near_keyframes = 0; });
   rejected([](LoopClosureParams& p) { p.final_searches = -1; });
   rejected([](LoopClosureParams& p) { p.final_sweep_every = -1; });
+  rejected([](LoopClosureParams& p) { p.corridor_sigma_m = -1.0; });
+  rejected([](LoopClosureParams& p) { p.corridor_offset_m = -0.1; });
 }
 
 }  // namespace

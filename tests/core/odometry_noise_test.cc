@@ -2,6 +2,7 @@
 // matches the spread of the corrections it is given, ignores a few glitches, stays within its
 // bounds, and nothing changes unless learning is on. The heading calibration finds a wheel-base
 // error and a per-metre drift through noise and outliers, and leaves unbiased odometry alone.
+// The pose graph's odometry edges learn their heading noise per metre and per radian turned.
 #include "shape_slam/odometry_noise.h"
 
 #include <gtest/gtest.h>
@@ -266,4 +267,79 @@ TEST(OdometryStalledTest, OnlyTheSamePoseWhileMoving) {
 }
 
 }  // namespace
+// Keyframe steps: straight ones of 1 m whose heading errs by sigma_m_rad per sqrt(metre), and
+// turning ones (0.5 m, 0.6 rad) by sigma_turn_rad per sqrt(radian); position errors 2 cm.
+void FeedSteps(OdometryEdgeNoise& noise, double sigma_m_rad, double sigma_turn_rad, int n,
+               std::mt19937& prng) {
+  std::normal_distribution<double> unit(0.0, 1.0);
+  const OdometryEdgeParams defaults;
+  for (int i = 0; i < n; ++i) {
+    const bool turning = i % 2 == 1;
+    const Pose2 step = turning ? Pose2(0.5, 0.0, 0.6) : Pose2(1.0, 0.0, 0.0);
+    const double sigma = turning ? sigma_turn_rad * std::sqrt(0.6)
+                                 : sigma_m_rad * std::sqrt(1.0 + defaults.distance_floor_m);
+    noise.Add(step, step * Pose2(0.02 * unit(prng), 0.02 * unit(prng), sigma * unit(prng)));
+  }
+}
+
+// A window of 2000 steps: the medians' sampling error is then about 7 %.
+OdometryEdgeParams LongWindow() {
+  OdometryEdgeParams p;
+  p.window = 2000;
+  return p;
+}
+
+TEST(OdometryEdgeNoiseTest, LearnsTheHeadingNoisePerMetreAndPerRadianTurned) {
+  std::mt19937 prng(5);
+  const OdometryEdgeParams p = LongWindow();
+  OdometryEdgeNoise noise(p);
+  FeedSteps(noise, 0.01, 0.05, p.min_samples - 1, prng);
+  EXPECT_FALSE(noise.Covariance(Pose2(1.0, 0.0, 0.0)));  // not enough steps yet
+  FeedSteps(noise, 0.01, 0.05, p.window, prng);
+  const std::optional<Eigen::Matrix3d> straight = noise.Covariance(Pose2(1.0, 0.0, 0.0));
+  const std::optional<Eigen::Matrix3d> turning = noise.Covariance(Pose2(0.0, 0.0, 0.6));
+  ASSERT_TRUE(straight && turning);
+  // Heading variance: variance_scale times the steps' own, within the medians' sampling error.
+  const double want_straight = p.variance_scale * 0.01 * 0.01 * (1.0 + p.distance_floor_m);
+  EXPECT_NEAR((*straight)(2, 2), want_straight, 0.2 * want_straight);
+  // A turn on the spot: the per-radian rate (0.05^2 per radian) and the floor's share per metre.
+  const double want_turning =
+      p.variance_scale * (0.05 * 0.05 * 0.6 + 0.01 * 0.01 * p.distance_floor_m);
+  EXPECT_NEAR((*turning)(2, 2), want_turning, 0.2 * want_turning);
+  // The position is left to the scans: its variance many times the steps' own (2 cm a axis).
+  EXPECT_GT((*straight)(0, 0), 10.0 * p.variance_scale * 0.02 * 0.02);
+  EXPECT_EQ((*straight)(0, 0), (*straight)(1, 1));
+  EXPECT_EQ((*straight)(0, 1), 0.0);
+}
+
+TEST(OdometryEdgeNoiseTest, AGlitchAmongTheStepsMovesNothingMuch) {
+  const OdometryEdgeParams p = LongWindow();
+  OdometryEdgeNoise clean(p), glitched(p);
+  std::mt19937 same(7);
+  FeedSteps(clean, 0.01, 0.05, 1990, same);
+  same.seed(7);
+  FeedSteps(glitched, 0.01, 0.05, 1990, same);
+  for (int i = 0; i < 10; ++i) glitched.Add(Pose2(1.0, 0.0, 0.0), Pose2(1.0, 0.0, 1.4));  // 80 deg
+  const double a = (*clean.Covariance(Pose2(1.0, 0.0, 0.0)))(2, 2);
+  const double b = (*glitched.Covariance(Pose2(1.0, 0.0, 0.0)))(2, 2);
+  EXPECT_NEAR(b, a, 0.1 * a);
+}
+
+TEST(OdometryEdgeNoiseTest, InvalidParamsAreRefused) {
+  OdometryEdgeParams p;
+  p.window = 0;
+  EXPECT_THROW(p.Validate(), std::invalid_argument);
+  p = OdometryEdgeParams{};
+  p.position_variance_factor = 0.0;
+  EXPECT_THROW(p.Validate(), std::invalid_argument);
+  p = OdometryEdgeParams{};
+  p.loss_sigmas = -1.0;
+  EXPECT_THROW(p.Validate(), std::invalid_argument);
+  p = OdometryEdgeParams{};
+  p.variance_scale = 0.0;
+  EXPECT_THROW(OdometryEdgeNoise{p}, std::invalid_argument);
+  p.enabled = false;
+  EXPECT_NO_THROW(p.Validate());
+}
+
 }  // namespace shape_slam

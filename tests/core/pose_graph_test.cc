@@ -95,6 +95,31 @@ TEST(PoseGraphTest, BadEdgesAreRejected) {
   Eigen::Matrix3d nan = Eigen::Matrix3d::Identity();
   nan(0, 0) = std::nan("");
   EXPECT_THROW(graph.AddEdge({0, 1, Pose2(), nan, false}), std::invalid_argument);
+  PoseGraphEdge negative_loss{0, 1, Pose2(), Eigen::Matrix3d::Identity(), false};
+  negative_loss.loss_sigmas = -1.0;
+  EXPECT_THROW(graph.AddEdge(negative_loss), std::invalid_argument);
+}
+
+// Odometry edges beside the scan edges (OdometryEdgeParams): tight in heading, one of them a
+// glitch of 80 deg. With its Cauchy loss the glitch bends the loop little; without, it bends it.
+TEST(PoseGraphTest, RobustLossOnAnOdometryEdgeHoldsOffAGlitch) {
+  const std::vector<Pose2> truth = SquareLoop();
+  const auto solve = [&](double loss_sigmas) {
+    PoseGraph graph = DriftingGraph(truth, 4);
+    const int n = graph.NumNodes();
+    for (int i = 1; i < n; ++i) {
+      Pose2 odometry = truth[i - 1].Inverse() * truth[i];
+      if (i == 6) odometry = odometry * Pose2(0.0, 0.0, 1.4);
+      PoseGraphEdge edge{i - 1, i, odometry, Eigen::Vector3d(1.0, 1.0, 1e-4).asDiagonal(), false};
+      edge.loss_sigmas = loss_sigmas;
+      graph.AddEdge(edge);
+    }
+    graph.Optimize();
+    return MaxError(graph, truth);
+  };
+  const double robust = solve(3.0), plain = solve(0.0);
+  EXPECT_LT(robust, 0.3);
+  EXPECT_GT(plain, 2.0 * robust);
 }
 
 TEST(PoseGraphTest, GraphWithoutEdgesStaysPut) {
