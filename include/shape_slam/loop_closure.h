@@ -93,10 +93,11 @@ struct LoopClosureParams {
   /// they disagree only along that line: the heading and the offset across it are known. The
   /// best match is then kept for those alone -- its position along the line is the graph's own,
   /// with corridor_sigma_m of standard deviation along it -- and decided as any closure
-  /// (pending until a consistent one confirms it). corridor_sigma_m 0: off, such a search is
-  /// ambiguous. Measured on infinite-corridor (docs/notebook.md, 2026-12-08): at its big loop's
-  /// return every match was refused as ambiguous while the heading drift they agreed on was
-  /// 6-21 deg.
+  /// (pending until a consistent one confirms it). Only with odometry (LoopKeyframe::odometry):
+  /// without it the graph's position along a corridor is the scans' own, which is what slides
+  /// there. corridor_sigma_m 0: off, such a search is ambiguous. Measured on infinite-corridor
+  /// (docs/notebook.md, 2026-12-08): at its big loop's return every match was refused as
+  /// ambiguous while the heading drift they agreed on was 6-21 deg.
   double corridor_heading_rad = 0.05;
   double corridor_offset_m = 0.5;
   double corridor_sigma_m = 10.0;
@@ -219,6 +220,9 @@ struct LoopKeyframe {
   ScanShapes shapes;        ///< its polylines, sensor frame (coarse: matching; fine: alignment)
   Pose2 T_robot_sensor;
   double travel_m = 0.0;    ///< distance driven when it was taken
+  /// The log's odometry was in use when it was taken: the graph's positions are then the
+  /// wheels' between closures, and AcrossCorridor may keep one of them along a corridor.
+  bool odometry = false;
 };
 
 /// A loop closure found by a search.

@@ -173,7 +173,7 @@ class OdometryEdgeNoise {
   /// One matched keyframe step: the odometry's increment and the scan edge's relative pose.
   void Add(const Pose2& odometry_step, const Pose2& scan_step);
   /// The covariance of an odometry increment between keyframes (x, y, theta), once min_samples
-  /// steps are in (else none).
+  /// steps are in (else none). Samples() counts the steps kept (at most `window`).
   std::optional<Eigen::Matrix3d> Covariance(const Pose2& odometry_step) const;
   int Samples() const { return static_cast<int>(samples_.size()); }
 
@@ -182,7 +182,7 @@ class OdometryEdgeNoise {
     double distance_m, turn_rad, theta2, xy2;
   };
   OdometryEdgeParams params_;
-  std::vector<Sample> samples_;  // in order; the last `window` count
+  std::vector<Sample> samples_;  // the last `window`, in order
 };
 
 /// Odometry that has not moved since the first scan is no odometry (logs without any carry

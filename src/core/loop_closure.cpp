@@ -554,7 +554,9 @@ std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& k
     keep_best(std::move(candidate));
   }
   if (loop && AmbiguousMatches(implied, params_.ambiguity_m, params_.ambiguity_fit_margin)) {
-    if (std::optional<LoopClosure> across = AcrossCorridor(implied, *loop, graph, params_)) return across;
+    if (keyframes[current].odometry) {
+      if (std::optional<LoopClosure> across = AcrossCorridor(implied, *loop, graph, params_)) return across;
+    }
     events_.push_back({*loop, LoopDecision::kAmbiguous});
     ++num_ambiguous_;
     return std::nullopt;

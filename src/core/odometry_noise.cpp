@@ -226,31 +226,31 @@ void OdometryEdgeNoise::Add(const Pose2& odometry_step, const Pose2& scan_step) 
   const Pose2 e = odometry_step.Inverse() * scan_step;
   samples_.push_back({odometry_step.Translation().norm(), std::abs(odometry_step.theta),
                       e.theta * e.theta, e.Translation().squaredNorm()});
+  // Only the last `window` count: the older ones go (a long log's keyframes would pile up).
+  if (samples_.size() > static_cast<std::size_t>(params_.window)) samples_.erase(samples_.begin());
 }
 
 std::optional<Eigen::Matrix3d> OdometryEdgeNoise::Covariance(const Pose2& odometry_step) const {
   if (Samples() < params_.min_samples) return std::nullopt;
   const double eps = params_.distance_floor_m;
-  const std::size_t n = std::min<std::size_t>(samples_.size(), params_.window);
-  const auto recent = samples_.end() - static_cast<std::ptrdiff_t>(n);
   // Squared errors per metre (straight steps) and per radian (turning ones).
   std::vector<double> straight_theta, straight_xy, turning_theta, turning_xy;
-  for (auto q = recent; q != samples_.end(); ++q) {
-    if (q->turn_rad < params_.straight_below_rad) {
-      straight_theta.push_back(q->theta2 / (q->distance_m + eps));
-      straight_xy.push_back(q->xy2 / (q->distance_m + eps));
+  for (const Sample& q : samples_) {  // the last `window` (Add)
+    if (q.turn_rad < params_.straight_below_rad) {
+      straight_theta.push_back(q.theta2 / (q.distance_m + eps));
+      straight_xy.push_back(q.xy2 / (q.distance_m + eps));
     } else {
-      turning_theta.push_back(q->theta2 / q->turn_rad);
-      turning_xy.push_back(q->xy2 / q->turn_rad);
+      turning_theta.push_back(q.theta2 / q.turn_rad);
+      turning_xy.push_back(q.xy2 / q.turn_rad);
     }
   }
   const std::size_t min_group = static_cast<std::size_t>(params_.min_group);
   if (straight_theta.size() < min_group) {  // too few straight steps: every step per metre
     straight_theta.clear();
     straight_xy.clear();
-    for (auto q = recent; q != samples_.end(); ++q) {
-      straight_theta.push_back(q->theta2 / (q->distance_m + q->turn_rad + eps));
-      straight_xy.push_back(q->xy2 / (q->distance_m + q->turn_rad + eps));
+    for (const Sample& q : samples_) {
+      straight_theta.push_back(q.theta2 / (q.distance_m + q.turn_rad + eps));
+      straight_xy.push_back(q.xy2 / (q.distance_m + q.turn_rad + eps));
     }
   }
   const double scale = params_.variance_scale;

@@ -359,7 +359,8 @@ bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
   const bool continued = !initial_map_.Empty(), first = keyframes_.empty();
   if (continued && first) AddMapAnchor(node, T_map_robot, trusted, covariance);
   keyframes_.push_back({scan, trusted, T_track_robot, scan_dead_reckoned_});
-  places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_});
+  places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_,
+                     odometry_.status == OdometryStatus::kUsed});
   return continued && !first && AnchorInLoadedMap(scan, places_.back().shapes, node, T_map_robot);
 }
 

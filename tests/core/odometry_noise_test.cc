@@ -296,6 +296,7 @@ TEST(OdometryEdgeNoiseTest, LearnsTheHeadingNoisePerMetreAndPerRadianTurned) {
   FeedSteps(noise, 0.01, 0.05, p.min_samples - 1, prng);
   EXPECT_FALSE(noise.Covariance(Pose2(1.0, 0.0, 0.0)));  // not enough steps yet
   FeedSteps(noise, 0.01, 0.05, p.window, prng);
+  EXPECT_EQ(noise.Samples(), p.window);  // the older steps are gone
   const std::optional<Eigen::Matrix3d> straight = noise.Covariance(Pose2(1.0, 0.0, 0.0));
   const std::optional<Eigen::Matrix3d> turning = noise.Covariance(Pose2(0.0, 0.0, 0.6));
   ASSERT_TRUE(straight && turning);
