@@ -96,8 +96,9 @@ struct LoopClosureParams {
   /// (pending until a consistent one confirms it). Only with odometry (LoopKeyframe::odometry):
   /// without it the graph's position along a corridor is the scans' own, which is what slides
   /// there. corridor_sigma_m 0: off, such a search is ambiguous. Measured on infinite-corridor
-  /// (docs/notebook.md, 2026-12-08): at its big loop's return every match was refused as
-  /// ambiguous while the heading drift they agreed on was 6-21 deg.
+  /// (docs/notebook.md, 2026-12-08): at its big loop's return every search was refused as
+  /// ambiguous, most with their matches on one line, while the heading they agreed on was
+  /// 10-25 deg off the graph's.
   double corridor_heading_rad = 0.05;
   double corridor_offset_m = 0.5;
   double corridor_sigma_m = 10.0;
