@@ -463,14 +463,15 @@ class ShapeSlam {
                          Registration& registration, ScanReport& report);
   bool IsKeyframe(const Pose2& T_map_robot) const;
   Pose2 KeyframePose(int keyframe) const;
-  void AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placement);
+  void AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placement,
+                       const std::optional<Pose2>& T_dead_reckoned);
   PoseGraphEdge SequentialEdge(const std::vector<Polyline>& fine, const LaserScan& scan,
                                const Pose2& T_map_robot, Placement placement,
                                const Eigen::Matrix3d& covariance) const;
   // Returns whether an edge to the loaded map asks for an optimisation (AnchorInLoadedMap).
   bool AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse, std::vector<Polyline> fine,
                    const Pose2& T_track_robot, Placement placement,
-                   const Eigen::Matrix3d& covariance);
+                   const Eigen::Matrix3d& covariance, const std::optional<Pose2>& T_dead_reckoned);
   internal::Localization LocalizeInLoadedMap(const ScanShapes& shapes, const LaserScan& scan,
                                              const Pose2& T_map_sensor_pred,
                                              const std::optional<Pose2>& drive) const;
@@ -512,10 +513,8 @@ class ShapeSlam {
   OdometryNoiseLearner odometry_noise_;  // the log's odometry noise (odometry_noise.learn)
   OdometryCalibrator odometry_calibrator_;  // the log's odometry heading error
   OdometryEdgeNoise odometry_edge_noise_;   // the noise of the graph's odometry edges
-  // The calibrated odometry's increments composed since the first scan, and its value at this
-  // scan when the odometry gave it a fresh increment (odometry edges; none otherwise).
+  // The calibrated odometry's increments composed since the first scan (odometry edges).
   Pose2 T_dead_reckoned_;
-  std::optional<Pose2> scan_dead_reckoned_;
   ShapeSlamParams tracking_params_;      // params_ with the learned odometry noise
   ShapeSlamParams keyframe_stages_;      // params_ for the keyframe track without odometry
   ConstantVelocity velocity_;            // the last motions: the prediction without odometry

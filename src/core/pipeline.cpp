@@ -328,10 +328,11 @@ PoseGraphEdge ShapeSlam::SequentialEdge(const std::vector<Polyline>& fine, const
 // The odometry edge (OdometryEdgeParams) beside the scan edge into a new keyframe, when both
 // keyframes had fresh odometry: the calibrated odometry's step between them, its noise learned
 // from the matched steps so far (this one included).
-void ShapeSlam::AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placement) {
+void ShapeSlam::AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placement,
+                                const std::optional<Pose2>& T_dead_reckoned) {
   const std::optional<Pose2>& previous = keyframes_.back().T_odometry;
-  if (!params_.odometry_edges.enabled || !scan_dead_reckoned_ || !previous) return;
-  const Pose2 step = previous->Inverse() * *scan_dead_reckoned_;
+  if (!params_.odometry_edges.enabled || !T_dead_reckoned || !previous) return;
+  const Pose2 step = previous->Inverse() * *T_dead_reckoned;
   if (placement == Placement::kMatched) odometry_edge_noise_.Add(step, scan_edge.T_from_to);
   const std::optional<Eigen::Matrix3d> covariance = odometry_edge_noise_.Covariance(step);
   if (!covariance) return;
@@ -343,7 +344,8 @@ void ShapeSlam::AddOdometryEdge(const PoseGraphEdge& scan_edge, Placement placem
 // A new pose-graph node, tied to the previous keyframe.
 bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
                             std::vector<Polyline> fine, const Pose2& T_track_robot,
-                            Placement placement, const Eigen::Matrix3d& covariance) {
+                            Placement placement, const Eigen::Matrix3d& covariance,
+                            const std::optional<Pose2>& T_dead_reckoned) {
   const bool trusted = placement == Placement::kMatched;
   std::optional<PoseGraphEdge> edge;
   if (!keyframes_.empty()) edge = SequentialEdge(fine, scan, T_track_robot, placement, covariance);
@@ -352,13 +354,13 @@ bool ShapeSlam::AddKeyframe(const LaserScan& scan, std::vector<Polyline> coarse,
   if (edge) {
     edge->to = node;
     graph_.AddEdge(*edge);
-    AddOdometryEdge(*edge, placement);
+    AddOdometryEdge(*edge, placement, T_dead_reckoned);
   }
   // Continuing a loaded map: the first keyframe was placed in it (Register), the later ones are
   // registered in it here.
   const bool continued = !initial_map_.Empty(), first = keyframes_.empty();
   if (continued && first) AddMapAnchor(node, T_map_robot, trusted, covariance);
-  keyframes_.push_back({scan, trusted, T_track_robot, scan_dead_reckoned_});
+  keyframes_.push_back({scan, trusted, T_track_robot, T_dead_reckoned});
   places_.push_back({node, {std::move(coarse), std::move(fine)}, scan.T_robot_sensor, travel_m_,
                      odometry_.status == OdometryStatus::kUsed});
   return continued && !first && AnchorInLoadedMap(scan, places_.back().shapes, node, T_map_robot);
@@ -568,6 +570,9 @@ struct ShapeSlam::Registration {
   // SubmapParams::restart_follow_* of the constant-velocity prediction (the scan fits poorly but
   // where the robot's motion puts it).
   bool follows_motion = false;
+  // The odometry's dead-reckoned pose of this scan, when it gave a fresh increment (odometry
+  // edges, AddOdometryEdge).
+  std::optional<Pose2> T_dead_reckoned;
 };
 
 // One scan through the pipeline: extract (§3.1) -> predict -> register (§3, §4.2-§4.3, §5.1)
@@ -586,10 +591,12 @@ ScanReport ShapeSlam::Process(const LaserScan& input_scan) {
   odometry_.scans_predicted += report.used_odometry ? 1 : 0;
   odometry_.scans_stale += prediction.odometry_stale ? 1 : 0;
   const Pose2 T_map_sensor_pred = prediction.T_map_robot * scan.T_robot_sensor;
-  if (prediction.odometry_delta) T_dead_reckoned_ = T_dead_reckoned_ * *prediction.odometry_delta;
-  scan_dead_reckoned_ = prediction.odometry_delta ? std::optional<Pose2>(T_dead_reckoned_) : std::nullopt;
 
   Registration registration = Register(shapes, scan, prediction, T_map_sensor_pred, report);
+  if (prediction.odometry_delta) {
+    T_dead_reckoned_ = T_dead_reckoned_ * *prediction.odometry_delta;
+    registration.T_dead_reckoned = T_dead_reckoned_;
+  }
   const internal::Localization& loc = registration.loc;
   LearnOdometry(prediction, loc);
   // Poses in the local tracking frame (the submaps').
@@ -781,7 +788,8 @@ void ShapeSlam::UpdateMapAndGraph(ScanShapes shapes, const LaserScan& scan,
   report.keyframe = true;
   const Pose2 T_track_robot = T_map_sensor * scan.T_robot_sensor.Inverse();
   const bool anchor_moved = AddKeyframe(scan, std::move(shapes.coarse), std::move(shapes.fine),
-                                        T_track_robot, placement, loc.covariance);
+                                        T_track_robot, placement, loc.covariance,
+                                        registration.T_dead_reckoned);
   if (loop_closer_.Update(places_, graph_) || anchor_moved) Optimize();
 }
 
