@@ -564,12 +564,21 @@ std::optional<LoopClosure> LoopCloser::Search(const std::vector<LoopKeyframe>& k
   return loop;
 }
 
+namespace {
+
+// The match that fits best (the first of equal fits, as LoopCloser::Search keeps its closure).
+// Requires a non-empty vector.
+const ImpliedPose& BestFit(const std::vector<ImpliedPose>& implied) {
+  return *std::max_element(implied.begin(), implied.end(),
+                           [](const ImpliedPose& a, const ImpliedPose& b) { return a.fit < b.fit; });
+}
+
+}  // namespace
+
 bool AmbiguousMatches(const std::vector<ImpliedPose>& implied, double ambiguity_m,
                       double fit_margin) {
   if (ambiguity_m <= 0.0 || implied.empty()) return false;
-  const ImpliedPose& best = *std::max_element(
-      implied.begin(), implied.end(),
-      [](const ImpliedPose& a, const ImpliedPose& b) { return a.fit < b.fit; });
+  const ImpliedPose& best = BestFit(implied);
   return std::any_of(implied.begin(), implied.end(), [&](const ImpliedPose& other) {
     return other.fit >= best.fit - fit_margin &&
            (other.T_graph_keyframe.Translation() - best.T_graph_keyframe.Translation()).norm() >
@@ -581,9 +590,7 @@ std::optional<LoopClosure> AcrossCorridor(const std::vector<ImpliedPose>& implie
                                           const LoopClosure& best, const PoseGraph& graph,
                                           const LoopClosureParams& params) {
   if (params.corridor_sigma_m <= 0.0 || implied.empty()) return std::nullopt;
-  const ImpliedPose& top = *std::max_element(
-      implied.begin(), implied.end(),
-      [](const ImpliedPose& a, const ImpliedPose& b) { return a.fit < b.fit; });
+  const ImpliedPose& top = BestFit(implied);
   // The rivals in the best match's keyframe frame: one heading, and the line through the farthest.
   std::vector<Point2> rivals;
   Point2 farthest = Point2::Zero();
